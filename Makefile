@@ -1,5 +1,5 @@
 # hybridwsi: two entry points, both set up .venv from scratch when needed.
-#   make run   -> reproduce the paper (quick configuration unless FULL=1) into results/
+#   make run   -> reproduce the paper into results/ (QUICK=1: coarse mesh, about a minute)
 #   make test  -> the default test suite (slow full-size runs excluded)
 PY      ?= python3
 VENV    := .venv
@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/hybridwsi reproduce --out $(OUT) $(if $(FULL),,--quick)
+	$(BIN)/hybridwsi reproduce --out $(OUT) $(if $(QUICK),--quick,)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

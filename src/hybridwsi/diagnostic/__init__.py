@@ -1,0 +1,43 @@
+"""Stability diagnostic of a force partition (paper Eq. 3–8, THEORY.md §2–4).
+
+- :func:`regress` — force sensitivities α, β, γ of the black-box force, with HAC uncertainty and
+  identifiability (:mod:`~hybridwsi.diagnostic.regression`);
+- :func:`prescribed_force_stability`, :func:`surrogate_stability`,
+  :func:`loosely_coupled_stability`, :func:`max_stable_dt`, :func:`assess` — the three stability
+  settings (:mod:`~hybridwsi.diagnostic.stability`), with the shared step function
+  :func:`lagged_step` (:mod:`~hybridwsi.diagnostic.integrators`);
+- :func:`reconstruct` — paper Eq. 4 integration (:mod:`~hybridwsi.diagnostic.reconstruct`);
+- known components in :mod:`~hybridwsi.diagnostic.components`.
+"""
+
+from hybridwsi.diagnostic.components import (
+    AddedMass,
+    Hydrostatic,
+    KnownComponent,
+    LinearDamping,
+    QuadraticDamping,
+    black_box_force,
+    parse_known,
+)
+from hybridwsi.diagnostic.integrators import SCHEMES, lagged_step
+from hybridwsi.diagnostic.reconstruct import ReconstructionResult, reconstruct
+from hybridwsi.diagnostic.regression import RegressionResult, frequency_domain_split, regress
+from hybridwsi.diagnostic.stability import (
+    StabilityReport,
+    amplification_matrix,
+    assess,
+    loosely_coupled_stability,
+    max_stable_dt,
+    prescribed_force_stability,
+    surrogate_stability,
+)
+
+__all__ = [
+    "AddedMass", "Hydrostatic", "KnownComponent", "LinearDamping", "QuadraticDamping",
+    "black_box_force", "parse_known",
+    "SCHEMES", "lagged_step",
+    "ReconstructionResult", "reconstruct",
+    "RegressionResult", "frequency_domain_split", "regress",
+    "StabilityReport", "amplification_matrix", "assess", "loosely_coupled_stability",
+    "max_stable_dt", "prescribed_force_stability", "surrogate_stability",
+]

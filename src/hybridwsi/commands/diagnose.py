@@ -1,0 +1,274 @@
+"""``hybridwsi diagnose``: force-sensitivity regression and stability verdict for any history.
+
+Reads a force/motion file (:func:`hybridwsi.history.read_history`: NetCDF, CSV, DualSPHysics,
+Kramer 2021), estimates missing velocity/acceleration from ``z`` (Savitzky–Golay by default,
+stated in the warnings), regresses ``F_bb = F_force − Σ F_known`` on the motion
+(:func:`hybridwsi.diagnostic.regression.regress`) and, when a mass is known, judges the stability
+of the partition (:func:`hybridwsi.diagnostic.stability.assess`).
+
+``--example`` runs on a built-in synthetic history (see :func:`example_history`) so that the
+output can be seen without any file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi.errors import InputError
+
+HELP = "regress a force history on the motion and judge the stability of the force partition"
+DESCRIPTION = (
+    "Fit F_bb = F - sum(known) ~ Fbar + alpha*zddot + beta*zdot + gamma*z (paper Eq. 5-7, with "
+    "an intercept) on a force/motion history, report identifiability and, with a mass, the "
+    "stability of the partition. FILE may be NetCDF, CSV (units in headers such as 'time [s]'), "
+    "DualSPHysics FloatingInfo/FloatingAce CSV or a Kramer 2021 decay file. Missing zdot/zddot "
+    "are estimated from z. Use --example to run on a built-in synthetic history."
+)
+
+#: the built-in example: the paper's sphere (m, A_inf, C) with a small linear damping
+EXAMPLE = {
+    "mass_kg": 7.06,
+    "added_mass_kg": 3.50,
+    "stiffness_N_per_m": 692.2,
+    "damping_Ns_per_m": 5.0,
+    "periods_s": [0.6, 0.75, 1.1],
+    "force_amplitudes_N": [4.0, 3.0, 5.0],
+    "phases_rad": [0.0, 1.3, 2.1],
+    "dt_s": 0.01,
+    "duration_s": 60.0,
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("file", nargs="?", metavar="FILE", help="force/motion history file")
+    parser.add_argument("--example", action="store_true",
+                        help="run on a built-in synthetic multi-frequency forced oscillator")
+    parser.add_argument("--force", default="F_tot", metavar="COL",
+                        help="force variable/column to regress [N] (default F_tot)")
+    parser.add_argument("--format", default="auto",
+                        help="file format: auto, csv, netcdf, kramer, kramer-numerical, "
+                        "dualsphysics-info, dualsphysics-ace (default auto)")
+    for name, what in (("time", "time [s]"), ("z", "displacement [m]"),
+                       ("zdot", "velocity [m/s]"), ("zddot", "acceleration [m/s^2]")):
+        parser.add_argument(f"--{name}", metavar="COL", help=f"CSV column holding {what}")
+    parser.add_argument("--known", action="append", default=[], metavar="NAME=VALUE",
+                        help="known component removed from the force with its physical sign: "
+                        "hydrostatic=C [N/m], added_mass=A [kg], damping=B [N s/m], "
+                        "quadratic_damping=Bq (repeatable)")
+    parser.add_argument("--mass", type=float, metavar="M",
+                        help="body mass [kg] (enables the stability assessment)")
+    parser.add_argument("--fix-alpha", type=float, metavar="A",
+                        help="fix alpha [kg] (e.g. m + A_inf) and regress only beta, gamma")
+    parser.add_argument("--dt", type=float, metavar="DT",
+                        help="time step [s] of the coupled solver for the loosely coupled check")
+    parser.add_argument("--resample", action="store_true",
+                        help="resample irregular time steps onto a uniform grid (cubic)")
+    parser.add_argument("--derivatives", choices=("savgol", "spline"), default="savgol",
+                        help="method for missing zdot/zddot (default savgol)")
+    parser.add_argument("--window", type=int, metavar="N",
+                        help="Savitzky-Golay window [samples] (default: chosen from the data)")
+    parser.add_argument("--json", metavar="OUT", help="write the results as JSON (atomically)")
+
+
+def example_history() -> xr.Dataset:
+    """The built-in example: steady state of a forced, damped sphere in heave.
+
+    ``(m + A) z̈ + B ż + C z = F_exc(t)`` with the paper's m = 7.06 kg, A∞ = 3.50 kg,
+    C = 692.2 N/m, a linear damping B = 5 N s/m and ``F_exc`` a sum of three sines (periods
+    0.6, 0.75 and 1.1 s; see :data:`EXAMPLE`). The steady-state response is exact (complex
+    amplitude ``F_k / (C − (m + A) ω_k² + i B ω_k)`` per harmonic), so z, ż, z̈ carry no
+    integration or differentiation error. ``F_tot = m z̈`` is the total force (paper Eq. 2) and
+    ``F_exc`` the excitation. With ``--known hydrostatic=692.2 --known added_mass=3.5`` the
+    regression of ``F_tot`` returns α = m + A, β = 0, γ = C (THEORY.md §1, case 3); with no known
+    component α = m, β = γ = 0 (case 1). Three frequencies make the split identifiable.
+    """
+    from hybridwsi.history import make_history
+
+    p = EXAMPLE
+    m, a, b, c = (p["mass_kg"], p["added_mass_kg"], p["damping_Ns_per_m"],
+                  p["stiffness_N_per_m"])
+    t = np.arange(0.0, p["duration_s"], p["dt_s"])
+    z = np.zeros_like(t, dtype=complex)
+    f_exc = np.zeros_like(t)
+    zdd = np.zeros_like(t, dtype=complex)
+    zd = np.zeros_like(t, dtype=complex)
+    for period, amp, phase in zip(p["periods_s"], p["force_amplitudes_N"], p["phases_rad"]):
+        w = 2 * np.pi / period
+        fk = amp * np.exp(1j * phase)
+        zk = fk / (c - (m + a) * w**2 + 1j * b * w) * np.exp(1j * w * t)
+        z, zd, zdd = z + zk, zd + 1j * w * zk, zdd - w**2 * zk
+        f_exc += np.real(fk * np.exp(1j * w * t))
+    return make_history(
+        t, z.real, zd.real, zdd.real, {"F_tot": m * zdd.real, "F_exc": f_exc},
+        mass=m, source="hybridwsi diagnose --example", inputs=p,
+    )
+
+
+def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[str, Any]]:
+    """The history to diagnose and a description of where it came from."""
+    from hybridwsi.history import read_history
+
+    if args.example:
+        if args.file:
+            raise InputError("give either FILE or --example, not both")
+        return example_history(), {"file": None, "example": EXAMPLE}
+    if not args.file:
+        raise InputError("no input: give a history FILE (CSV, NetCDF, ...) or --example")
+    mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot")}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hist = read_history(args.file, format=args.format, mass=args.mass,
+                            resample=args.resample, **mapping)
+    notes += [str(w.message) for w in caught]
+    info = {"file": str(Path(args.file)), "format": hist.attrs.get("format"),
+            "columns": {k: v for k, v in mapping.items() if v is not None}}
+    if "resampled" in hist.attrs:
+        notes.append(f"time resampled: {hist.attrs['resampled']}")
+    return hist, info
+
+
+def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr.Dataset:
+    """Check that z and the force exist; estimate missing derivatives (noted)."""
+    from hybridwsi.history import estimate_derivatives, force_names
+
+    if "z" not in hist:
+        missing = hist.attrs.get("missing", "z")
+        raise InputError(f"the history has no displacement z (missing: {missing}); "
+                         "the diagnostic needs z(t)")
+    absent = [k for k in ("zdot", "zddot") if k not in hist]
+    if absent:
+        hist = estimate_derivatives(hist, method=args.derivatives, window=args.window)
+        for k in absent:
+            notes.append(f"{k} was not in the file: estimated from z by "
+                         f"{hist[k].attrs['estimated']}")
+    if args.force not in hist:
+        from hybridwsi.history import split_header
+
+        base = split_header(args.force)[0]
+        if base in hist and hist[base].attrs.get("role") == "force":
+            args.force = base
+        else:
+            have = ", ".join(force_names(hist)) or "none"
+            raise InputError(f"no force '{args.force}' in the history (force columns: {have}); "
+                             "choose one with --force")
+    return hist
+
+
+def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namespace,
+               notes: list[str]) -> list[dict[str, Any]] | None:
+    """Stability reports as dicts, or None without a mass."""
+    from hybridwsi.history import mass_matrix
+
+    mass = args.mass if args.mass is not None else mass_matrix(hist)
+    if mass is None:
+        notes.append("no mass given (--mass): stability assessment skipped")
+        return None
+    if args.dt is not None and (not np.isfinite(args.dt) or args.dt <= 0):
+        raise InputError(f"--dt must be a positive time step in s, got {args.dt}")
+    try:
+        from hybridwsi.diagnostic.stability import assess
+    except ImportError:
+        notes.append("stability assessment is not available in this installation")
+        return None
+    m = np.asarray(mass, dtype=float)
+    reports = assess(result, float(m.ravel()[0]) if m.size == 1 else m, known, dt=args.dt)
+    if isinstance(reports, dict):
+        reports = list(reports.values())
+    elif not isinstance(reports, (list, tuple)):
+        reports = [reports]
+    return [r.to_dict() for r in reports]
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
+
+
+def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
+    """Run the whole diagnosis: ``(JSON-ready dict, RegressionResult)``."""
+    from hybridwsi import __version__
+    from hybridwsi.diagnostic.components import parse_known
+    from hybridwsi.diagnostic.regression import regress
+
+    notes: list[str] = []
+    known = [parse_known(k) for k in args.known]  # fail fast on a bad --known
+    if args.mass is not None and (not np.isfinite(args.mass) or args.mass <= 0):
+        raise InputError(f"--mass must be a positive mass in kg, got {args.mass}")
+    hist, info = _load(args, notes)
+    hist = _prepare(hist, args, notes)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = regress(hist, force=args.force, known=known, fix_alpha=args.fix_alpha)
+            stability = _stability(result, hist, known, args, notes)
+        except InputError:
+            raise
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise InputError(f"the diagnostic failed on this history: {_one_line(exc)}") from None
+    notes += [str(w.message) for w in caught]
+    out = result.to_dict()
+    out["warnings"] = notes + list(out.get("warnings", []))
+    out["stability"] = stability
+    out["input"] = {**info, "force": args.force, "known": list(args.known),
+                    "fix_alpha": args.fix_alpha, "dt": args.dt,
+                    "n_samples": int(hist.sizes["time"]),
+                    "estimated": {k: hist[k].attrs["estimated"]
+                                  for k in ("zdot", "zddot") if "estimated" in hist[k].attrs}}
+    out["hybridwsi_version"] = __version__
+    return out, result
+
+
+def _print(out: dict[str, Any], result: Any, notes_count: int) -> None:
+    print(result.to_table())
+    for w in out["warnings"][:notes_count]:
+        print(f"note: {w}")
+    for rep in out["stability"] or []:
+        print(f"stability [{rep.get('setting', '?')}]: {rep.get('verdict', '?')} - "
+              f"{rep.get('message', '')}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from hybridwsi.history import atomic_write
+
+    out, result = diagnose(args)
+    n_notes = len(out["warnings"]) - len(result.warnings)
+    _print(out, result, n_notes)
+    if args.example and not args.known:
+        print("try: hybridwsi diagnose --example --known hydrostatic=692.2 --known added_mass=3.5")
+    if args.json:
+        text = json.dumps(_finite(out), indent=2, allow_nan=False, default=_json_default)
+
+        def write(tmp: str) -> None:
+            Path(tmp).write_text(text + "\n", encoding="utf-8")
+
+        try:
+            atomic_write(args.json, write)
+        except OSError as exc:
+            raise InputError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _finite(obj: Any) -> Any:
+    """JSON has no inf/NaN: replace them by None, recursively."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, (float, np.floating)) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)

@@ -1,0 +1,281 @@
+"""Component selection (THEORY.md §5): which forces to model, which to leave to a surrogate.
+
+Candidates (built from the coefficients and/or the history):
+
+==================== =========================================================================
+``hydrostatic``       ``-C z`` (``hydrostatic_stiffness``)
+``added_mass_inf``    ``-A∞ z̈`` (``added_mass_inf``)
+``radiation_memory``  ``-∫K ż`` as state space (the history's ``radiation_ss`` attribute, or a
+                      fit of the IRF of the coefficients)
+``linear_damping``    ``-B ż`` with ``B = B(ω_p)`` at the motion's peak frequency
+``quadratic_damping`` ``-Bq |ż| ż`` (only when ``quadratic_drag`` is given)
+``excitation``        the history's ``F_exc`` as a prescribed time series
+==================== =========================================================================
+
+Every subset is a partition (``linear_damping`` and ``radiation_memory`` both model radiation
+damping, so they are not combined). For each partition the residual
+``F_bb = F_tot − Σ known`` is regressed (:func:`~hybridwsi.diagnostic.regression.regress`),
+the identified ``(α, β, γ)`` play the surrogate in the stability checks (a)–(c) of
+:mod:`~hybridwsi.diagnostic.stability`, and the reference is reconstructed with the residual
+prescribed (:func:`~hybridwsi.diagnostic.reconstruct.reconstruct`).
+
+Score (lower is better)::
+
+    score = ρ_c + nrms_recon + 0.1 · n_unknown_physics
+
+``ρ_c`` is the spectral radius of the loosely coupled step map at the target Δt (the residual's
+sensitivity as the integrator sees it), ``nrms_recon`` the reconstruction's RMS error over the
+std of z, and the last term prefers partitions that model more of the physics when the first
+two tie. Partitions failing (b) or (c) (``feasible = False``) rank after all feasible ones.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import warnings
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from hybridwsi.diagnostic.components import (
+    AddedMass,
+    Hydrostatic,
+    KnownComponent,
+    LinearDamping,
+    QuadraticDamping,
+    as_matrix,
+    summed_linear_coefficients,
+)
+from hybridwsi.errors import HybridWSIError, InputError
+from hybridwsi.history import mass_matrix, time_step, validate
+
+CANDIDATES = ("hydrostatic", "added_mass_inf", "radiation_memory", "linear_damping",
+              "quadratic_damping", "excitation")
+EXCLUSIVE = ({"radiation_memory", "linear_damping"},)
+#: weight of each physics candidate left to the surrogate in the score
+UNKNOWN_WEIGHT = 0.1
+
+
+class _Prescribed(KnownComponent):
+    """A force taken from the history (e.g. ``F_exc``): no state dependence."""
+
+    name = "excitation"
+
+    def __init__(self, variable: str) -> None:
+        self.variable = variable
+
+    def force(self, hist: xr.Dataset) -> np.ndarray:
+        return np.asarray(hist[self.variable].values, dtype=float)
+
+    def linear_coefficients(self, n_dof: int):
+        z = np.zeros((n_dof, n_dof))
+        return z, z.copy(), z.copy()
+
+    def describe(self) -> str:
+        return f"prescribed({self.variable})"
+
+
+def _coef(coeffs: xr.Dataset | None, name: str, n_dof: int) -> np.ndarray | None:
+    if coeffs is None or name not in coeffs:
+        return None
+    return np.asarray(coeffs[name].values, dtype=float).reshape(n_dof, n_dof)
+
+
+def _peak_omega(hist: xr.Dataset) -> float:
+    z = np.asarray(hist["z"].values, float)[:, 0]
+    spec = np.abs(np.fft.rfft(z - z.mean())) ** 2
+    w = 2 * np.pi * np.fft.rfftfreq(z.size, time_step(hist))
+    return float(w[1:][np.argmax(spec[1:])])
+
+
+def _memory(hist: xr.Dataset, coeffs: xr.Dataset | None) -> KnownComponent | None:
+    from hybridwsi.hydro.statespace import RadiationMemory, RadiationSS, fit_radiation_ss
+
+    if "radiation_ss" in hist.attrs:
+        return RadiationMemory(RadiationSS.from_dict(json.loads(hist.attrs["radiation_ss"])))
+    if coeffs is None or "radiation_damping" not in coeffs:
+        return None
+    from hybridwsi.hydro.irf import radiation_irf
+
+    return RadiationMemory(fit_radiation_ss(radiation_irf(coeffs)))
+
+
+def build_candidates(
+    hist: xr.Dataset,
+    coeffs: xr.Dataset | None = None,
+    *,
+    quadratic_drag: float | None = None,
+) -> dict[str, KnownComponent]:
+    """The candidate known components available for this history and coefficient set."""
+    n = hist.sizes["dof"]
+    out: dict[str, KnownComponent] = {}
+    c = _coef(coeffs, "hydrostatic_stiffness", n)
+    if c is not None:
+        out["hydrostatic"] = Hydrostatic(c)
+    a = _coef(coeffs, "added_mass_inf", n)
+    if a is not None:
+        out["added_mass_inf"] = AddedMass(a)
+    mem = _memory(hist, coeffs)
+    if mem is not None:
+        out["radiation_memory"] = mem
+    if coeffs is not None and "radiation_damping" in coeffs:
+        b = coeffs["radiation_damping"].interp(omega=_peak_omega(hist)).values.reshape(n, n)
+        out["linear_damping"] = LinearDamping(b)
+    if quadratic_drag is not None:
+        out["quadratic_damping"] = QuadraticDamping(quadratic_drag).linearise_on(hist)
+    if "F_exc" in hist:
+        out["excitation"] = _Prescribed("F_exc")
+    return out
+
+
+def enumerate_partitions(names: Sequence[str]) -> list[tuple[str, ...]]:
+    """All subsets of ``names`` (in candidate order) without mutually exclusive pairs."""
+    names = [n for n in CANDIDATES if n in names] + [n for n in names if n not in CANDIDATES]
+    out = []
+    for r in range(len(names) + 1):
+        for combo in itertools.combinations(names, r):
+            if any(ex <= set(combo) for ex in EXCLUSIVE):
+                continue
+            out.append(combo)
+    return out
+
+
+def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
+    from hybridwsi.diagnostic import stability
+
+    n = m.shape[0]
+    a_k, b_k, c_k = summed_linear_coefficients(known, n)
+    rep_a = stability.prescribed_force_stability(m, a_k, b_k, c_k)
+    rep_b = stability.surrogate_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta, reg.gamma)
+    rep_c = stability.loosely_coupled_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta,
+                                                reg.gamma, dt, scheme)
+    return {
+        "prescribed_verdict": rep_a.verdict,
+        "surrogate_verdict": rep_b.verdict,
+        "loosely_coupled_verdict": rep_c.verdict,
+        "spectral_radius": rep_c.spectral_radius,
+        "max_stable_dt": rep_c.max_stable_dt,
+        "added_mass_ratio": rep_c.conditions.get("added_mass_ratio"),
+        "feasible": bool(rep_b.stable and rep_c.verdict == "stable"),
+    }
+
+
+def _reconstruction_error(hist, known, m) -> float:
+    from hybridwsi.diagnostic.reconstruct import reconstruct
+
+    # a prescribed time series is equivalent inside or outside F_bb for the reconstruction ODE
+    physics = [k for k in known if not isinstance(k, _Prescribed)]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = reconstruct(hist, "F_tot", physics, mass=m)
+        return float(np.max(res.metrics["nrms_error"]))
+    except HybridWSIError:  # a diverging reconstruction is a result, not a crash
+        return float("inf")
+
+
+def select_partition(
+    hist: xr.Dataset,
+    coeffs: xr.Dataset | None = None,
+    candidates: Sequence[str] | None = None,
+    *,
+    dt: float | None = None,
+    mass: float | np.ndarray | None = None,
+    force: str = "F_tot",
+    quadratic_drag: float | None = None,
+    scheme: str = "newmark",
+    reconstruct_each: bool = True,
+) -> pd.DataFrame:
+    """Rank force partitions by the stability of their residual and reconstruction error.
+
+    Parameters
+    ----------
+    hist : TimeHistory
+        Reference with ``z, zdot, zddot`` and ``force`` (``F_exc`` enables ``excitation``).
+    coeffs : Dataset, optional
+        BEM coefficients (``hydrostatic_stiffness``, ``added_mass_inf``, ``radiation_damping``).
+    candidates : sequence of str, optional
+        Candidate names to combine (default: every one available, see module doc).
+    dt : float, optional
+        Target hybrid time step [s] for check (c); default the history's.
+    mass : float or array, optional
+        Rigid-body mass [kg]; default ``hist["mass"]``, else ``coeffs["mass"]``.
+    force : str
+        Total force variable [N].
+    quadratic_drag : float, optional
+        Bq [N s²/m²] of the ``quadratic_damping`` candidate.
+    scheme : str
+        Loosely coupled integrator (:mod:`hybridwsi.diagnostic.integrators`).
+    reconstruct_each : bool
+        Run the reconstruction per partition (the slow part).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per partition, sorted by ``rank`` (1 = recommended); columns ``partition``,
+        ``known``, ``alpha``, ``beta``, ``gamma`` (1-DOF: scalars; else lists),
+        ``condition_number``, ``identifiable``, verdicts of (a)-(c), ``spectral_radius``,
+        ``max_stable_dt``, ``added_mass_ratio``, ``recon_nrms``, ``feasible``, ``score``.
+    """
+    from hybridwsi.diagnostic.regression import regress
+
+    validate(hist)
+    n = hist.sizes["dof"]
+    m = mass if mass is not None else mass_matrix(hist)
+    if m is None and coeffs is not None and "mass" in coeffs:
+        m = np.asarray(coeffs["mass"].values, float)
+    if m is None:
+        raise InputError("no mass: pass --mass, or use a history/coefficients carrying 'mass'")
+    m = as_matrix(m, n, "mass")
+    dt = float(dt if dt is not None else time_step(hist))
+    if not dt > 0:
+        raise InputError(f"dt must be positive, got {dt}")
+    avail = build_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
+    names = list(avail) if candidates is None else list(candidates)
+    missing = [c for c in names if c not in avail]
+    if missing:
+        raise InputError(f"candidate(s) {missing} not available (need coefficients or F_exc); "
+                         f"available: {', '.join(avail) or 'none'}")
+    rows = []
+    for combo in enumerate_partitions(names):
+        known = [avail[c] for c in combo]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            reg = regress(hist, force=force, known=known)
+        row: dict[str, Any] = {
+            "partition": "+".join(combo) or "(none)",
+            "known": list(combo),
+            "alpha": _squeeze(reg.alpha), "beta": _squeeze(reg.beta), "gamma": _squeeze(reg.gamma),
+            "condition_number": float(reg.condition_number),
+            "identifiable": bool(reg.identifiable),
+        }
+        row.update(_verdicts(m, known, reg, dt, scheme))
+        row["recon_nrms"] = _reconstruction_error(hist, known, m) if reconstruct_each else np.nan
+        n_unknown = len([c for c in CANDIDATES if c in avail and c not in combo
+                         and not (c == "linear_damping" and "radiation_memory" in combo)
+                         and not (c == "radiation_memory" and "linear_damping" in combo)])
+        recon = row["recon_nrms"] if np.isfinite(row["recon_nrms"]) else 1e3
+        row["score"] = float(row["spectral_radius"] + (0 if np.isnan(recon) else recon)
+                             + UNKNOWN_WEIGHT * n_unknown)
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    table = table.sort_values(["feasible", "score"], ascending=[False, True], kind="stable")
+    table.insert(0, "rank", np.arange(1, len(table) + 1))
+    table.attrs = {"dt": dt, "scheme": scheme, "mass": m.tolist(),
+                   "score": "spectral_radius + recon_nrms + 0.1 * n_unknown (feasible first)"}
+    return table.reset_index(drop=True)
+
+
+def _squeeze(a: np.ndarray) -> float | list:
+    a = np.asarray(a, dtype=float)
+    return float(a[0, 0]) if a.size == 1 else a.tolist()
+
+
+def table_to_json(table: pd.DataFrame) -> dict[str, Any]:
+    """JSON-ready form of a :func:`select_partition` table."""
+    recs = json.loads(table.to_json(orient="records"))
+    return {"attrs": table.attrs, "partitions": recs}

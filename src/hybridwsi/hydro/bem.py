@@ -1,0 +1,518 @@
+"""Frequency-domain BEM coefficients with Capytaine, cached and resumable.
+
+:func:`compute` returns the coefficient Dataset of ``docs/DATA_MODEL.md``: added mass A(ω),
+radiation damping B(ω), excitation force (Froude–Krylov + diffraction), the limits A(∞) and
+A(0), the hydrostatic stiffness and the rigid-body mass.
+
+How the run is organised (and why):
+
+- Frequencies are solved in chunks with ``capytaine.BEMSolver.fill_dataset``; after each chunk
+  the solved frequencies are merged into a *store* NetCDF (atomic write) keyed by a SHA-256 of
+  every input except the frequency list. A run that is interrupted, or a later run with more
+  frequencies of the same configuration, solves only the frequencies that are missing.
+  The finished result is also written under a key that includes the frequencies, so repeating
+  the same call reads one file and solves nothing.
+- Cache folder: ``cache_dir``, else ``$HYBRIDWSI_CACHE/bem``, else ``~/.cache/hybridwsi/bem``.
+- BLAS is limited to one thread during the solve (threadpoolctl; else set
+  ``OPENBLAS_NUM_THREADS=1`` yourself): multi-threaded OpenBLAS makes Capytaine's symmetric
+  block products up to ~30x slower (CAPYTAINE_NOTES.md pitfall 3).
+- Default ``method="direct"``: it converges faster with the mesh (A(∞) within 0.01 % of the
+  analytic hemisphere value at 6400 panels, pitfall 4).
+- The ω = 0 and ω = ∞ limits are Capytaine radiation problems at ``omega=0`` and
+  ``omega=np.inf``.
+- Finite depth (pitfall 5): Capytaine's default Green function returns NaN for small kh. Those
+  frequencies are re-solved with ``FinGreen3D`` on the hull *without* lid (FinGreen3D fails on
+  panels lying in the free surface; irregular frequencies are far above these low
+  frequencies); ``low_kh="drop"`` drops them instead. Frequencies still NaN are dropped with a
+  warning and listed in ``attrs["dropped_omega"]``. A(0) is NaN in finite depth when no Green
+  function can evaluate it (warned, flagged).
+- Quality checks: NaN values and negative diagonal damping raise a ``UserWarning`` and are
+  listed in ``attrs["quality_flags"]`` (JSON); never silent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import math
+import os
+import warnings
+from collections.abc import Iterator, Sequence
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi.bodies import FloatingSphere, check_dofs
+from hybridwsi.errors import InputError, SolverError
+from hybridwsi.history import read_netcdf, to_netcdf
+
+#: number of frequencies solved between two checkpoints
+CHUNK_SIZE = 10
+#: default hull panel count (the paper's mesh)
+DEFAULT_PANELS = 6400
+#: relative tolerance below which a negative diagonal damping is treated as round-off
+NEG_DAMPING_RTOL = 1e-6
+COEFF_VARS = ("added_mass", "radiation_damping", "excitation_force")
+
+
+# ---------------------------------------------------------------------------- configurations
+def paper_frequencies() -> np.ndarray:
+    """The paper's 400 log-spaced frequencies from 0.1 to 40 rad/s [rad/s]."""
+    return np.geomspace(0.1, 40.0, 400)
+
+
+def paper_configuration() -> dict[str, Any]:
+    """The paper's BEM set-up as keyword arguments of :func:`compute`:
+    ``compute(**paper_configuration())`` (R = 0.15 m sphere, m = 7.06 kg, 6400 panels with
+    axial symmetry and lid, 400 frequencies 0.1–40 rad/s, infinite depth)."""
+    return {"body": FloatingSphere.paper(), "omega": paper_frequencies(),
+            "n_panels": DEFAULT_PANELS, "water_depth": math.inf, "method": "direct"}
+
+
+#: shipped result of ``compute(**paper_configuration())`` (see data/README_bem.md)
+PAPER_COEFFS = Path(__file__).resolve().parent.parent / "data" / "bem_paper_sphere.nc"
+
+
+def paper_coefficients() -> xr.Dataset:
+    """The paper configuration's coefficients as shipped with the package (no BEM run).
+
+    Equal to ``compute(**paper_configuration())``; recompute with ``hybridwsi bem``.
+    """
+    if not PAPER_COEFFS.is_file():
+        raise InputError(f"{PAPER_COEFFS} is missing; run `hybridwsi bem --out {PAPER_COEFFS}`")
+    return read_netcdf(PAPER_COEFFS)
+
+
+def default_cache_dir() -> Path:
+    """``$HYBRIDWSI_CACHE/bem`` if that variable is set, else ``~/.cache/hybridwsi/bem``."""
+    root = os.environ.get("HYBRIDWSI_CACHE")
+    return Path(root).expanduser() / "bem" if root else Path.home() / ".cache" / "hybridwsi" / "bem"
+
+
+# ---------------------------------------------------------------------------- public API
+def compute(
+    body: FloatingSphere,
+    omega: Sequence[float] | np.ndarray,
+    *,
+    water_depth: float = math.inf,
+    dofs: Sequence[str] = ("Heave",),
+    wave_directions: Sequence[float] = (0.0,),
+    n_panels: int = DEFAULT_PANELS,
+    resolution: tuple[int, int] | None = None,
+    include_inf: bool = True,
+    include_zero: bool = True,
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool = True,
+    method: str = "direct",
+    symmetric: bool = True,
+    lid: bool = True,
+    low_kh: str = "fingreen",
+    use_cache: bool = True,
+    chunk_size: int = CHUNK_SIZE,
+) -> xr.Dataset:
+    """Linear hydrodynamic coefficients of ``body`` from Capytaine (see module docstring).
+
+    Parameters
+    ----------
+    body : FloatingSphere
+        The floating body (its ``rho`` and ``g`` are used).
+    omega : array_like
+        Wave frequencies [rad/s], finite and > 0 (sorted on output; duplicates rejected).
+    water_depth : float
+        Water depth [m]; ``inf`` for deep water.
+    dofs : sequence of str
+        Rigid-body degrees of freedom (Capytaine names), about the centre of mass.
+    wave_directions : sequence of float
+        Incident wave directions [rad] for the excitation force.
+    n_panels : int
+        Approximate number of hull panels (ignored when ``resolution`` is given).
+    resolution : (n_theta, n_phi), optional
+        Capytaine ``mesh_sphere`` resolution (full sphere).
+    include_inf, include_zero : bool
+        Also solve the ω = ∞ / ω = 0 radiation limits (else the variables are NaN).
+    cache_dir : path, optional
+        Cache folder (default :func:`default_cache_dir`).
+    progress : bool
+        Show a tqdm progress bar over frequencies.
+    method : {"direct", "indirect"}
+        Capytaine boundary integral formulation.
+    symmetric, lid : bool
+        Use the axisymmetric mesh / add a waterplane lid (irregular frequencies).
+    low_kh : {"fingreen", "drop"}
+        Finite depth: re-solve NaN frequencies with FinGreen3D, or drop them.
+    use_cache : bool
+        Read and write the cache (False: solve everything, write nothing).
+    chunk_size : int
+        Frequencies per checkpoint.
+
+    Returns
+    -------
+    xarray.Dataset
+        Coefficients as in ``docs/DATA_MODEL.md``; ``attrs["input_hash"]`` identifies the
+        inputs, ``attrs["quality_flags"]`` lists problems found (JSON list, empty when clean).
+    """
+    omega = _check_omega(omega)
+    dofs = check_dofs(dofs)
+    directions = _check_directions(wave_directions)
+    depth = _check_depth(water_depth, body)
+    if method not in ("direct", "indirect"):
+        raise InputError(f"method must be 'direct' or 'indirect', got {method!r}")
+    if low_kh not in ("fingreen", "drop"):
+        raise InputError(f"low_kh must be 'fingreen' or 'drop', got {low_kh!r}")
+    if int(chunk_size) < 1:
+        raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
+    resolution = body.panel_resolution(resolution if resolution is not None else n_panels)
+
+    config = _configuration(body, depth, dofs, directions, resolution, method, symmetric, lid,
+                            low_kh)
+    config_hash = _sha256(config)
+    input_hash = _sha256({**config, "omega": omega.tolist(), "include_inf": include_inf,
+                          "include_zero": include_zero})
+    root = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
+    final_path = root / f"coeffs_{input_hash[:24]}.nc"
+    store_path = root / f"store_{config_hash[:24]}.nc"
+
+    if use_cache and final_path.is_file():
+        cached = _read_cache(final_path)
+        if cached is not None and cached.attrs.get("input_hash") == input_hash:
+            for flag in json.loads(cached.attrs.get("quality_flags", "[]")):
+                warnings.warn(f"BEM coefficients (cached): {flag}", stacklevel=2)
+            return cached
+
+    limits = [w for w, on in ((0.0, include_zero), (math.inf, include_inf)) if on]
+    store = _read_cache(store_path) if use_cache and store_path.is_file() else None
+    todo = _missing(np.concatenate([omega, limits]), store)
+    if todo.size:
+        store = _solve_missing(body, todo, store, store_path if use_cache else None, dofs=dofs,
+                               directions=directions, depth=depth, resolution=resolution,
+                               method=method, symmetric=symmetric, lid=lid, low_kh=low_kh,
+                               progress=progress, chunk_size=int(chunk_size))
+    ds = _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
+                   include_inf, include_zero)
+    if use_cache:
+        to_netcdf(ds, final_path)
+    return ds
+
+
+# ---------------------------------------------------------------------------- input checks
+def _check_omega(omega: Any) -> np.ndarray:
+    try:
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError("omega must be a list of numbers [rad/s]") from None
+    if w.ndim != 1 or w.size == 0:
+        raise InputError(f"omega must be a non-empty 1-D list of frequencies, got shape {w.shape}")
+    if not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise InputError("omega must be finite and > 0 rad/s (the 0 and inf limits are "
+                         "include_zero/include_inf)")
+    w = np.sort(w)
+    if np.any(np.diff(w) <= 1e-12 * w[1:]):
+        raise InputError("omega contains duplicated frequencies")
+    return w
+
+
+def _check_directions(directions: Any) -> np.ndarray:
+    d = np.atleast_1d(np.asarray(directions, dtype=float))
+    if d.ndim != 1 or d.size == 0 or not np.all(np.isfinite(d)):
+        raise InputError("wave_directions must be a non-empty list of finite angles [rad]")
+    if np.unique(d).size != d.size:
+        raise InputError("wave_directions contains duplicates")
+    return d
+
+
+def _check_depth(depth: Any, body: FloatingSphere) -> float:
+    try:
+        h = float(depth)
+    except (TypeError, ValueError):
+        raise InputError(f"water_depth must be a number or inf, got {depth!r}") from None
+    if math.isnan(h) or h <= 0:
+        raise InputError(f"water_depth must be > 0 (or inf), got {depth!r}")
+    if not isinstance(body, FloatingSphere):
+        raise InputError(f"body must be a hybridwsi.bodies.FloatingSphere, got {type(body).__name__}")
+    if math.isfinite(h) and h <= body.draft:
+        raise InputError(f"water_depth {h} m must exceed the body draft {body.draft} m")
+    return h
+
+
+# ---------------------------------------------------------------------------- hashing/cache
+def _pkg_version(name: str) -> str:
+    try:
+        return version(name)
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _configuration(body, depth, dofs, directions, resolution, method, symmetric, lid,
+                   low_kh) -> dict[str, Any]:
+    """Every input except the frequencies (key of the resumable store)."""
+    return {
+        "body": body.to_dict(), "water_depth": depth if math.isfinite(depth) else "inf",
+        "dofs": list(dofs), "wave_directions": directions.tolist(),
+        "mesh": {"kind": "mesh_sphere", "resolution": list(resolution), "symmetric": symmetric,
+                 "lid": lid},
+        "solver": {"method": method, "green_function": "Delhommeau", "low_kh": low_kh},
+        "versions": {"hybridwsi": _pkg_version("hybridwsi"),
+                     "capytaine": _pkg_version("capytaine")},
+    }
+
+
+def _sha256(obj: Any) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()
+
+
+def _read_cache(path: Path) -> xr.Dataset | None:
+    """A cache file, or None (with a warning) when it cannot be read: it is then recomputed."""
+    try:
+        return read_netcdf(path)
+    except InputError as exc:
+        warnings.warn(f"ignoring unreadable BEM cache file ({exc})", stacklevel=3)
+        return None
+
+
+def _missing(wanted: np.ndarray, store: xr.Dataset | None) -> np.ndarray:
+    """Frequencies (incl. 0/inf) of ``wanted`` not yet in ``store``."""
+    if store is None:
+        return wanted
+    done = np.asarray(store["omega"].values, dtype=float)
+    return np.array([w for w in wanted if not np.any(_same(done, w))], dtype=float)
+
+
+def _same(a: np.ndarray, w: float) -> np.ndarray:
+    return (a == w) | (np.isfinite(a) & np.isclose(a, w, rtol=1e-12, atol=0.0))
+
+
+# ---------------------------------------------------------------------------- solving
+@contextlib.contextmanager
+def blas_single_thread() -> Iterator[None]:
+    """Limit BLAS to one thread (threadpoolctl), else warn unless OPENBLAS_NUM_THREADS is set."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        if os.environ.get("OPENBLAS_NUM_THREADS") != "1":
+            warnings.warn("threadpoolctl is not installed: set OPENBLAS_NUM_THREADS=1 before "
+                          "starting Python, multi-threaded BLAS slows Capytaine down a lot",
+                          stacklevel=3)
+        yield
+        return
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
+def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, resolution, method,
+                   symmetric, lid, low_kh, progress, chunk_size) -> xr.Dataset:
+    """Solve ``todo`` frequencies chunk by chunk, checkpointing into ``store_path``."""
+    import capytaine as cpt
+    from tqdm.auto import tqdm
+
+    finite = todo[np.isfinite(todo) & (todo > 0)]
+    limits = todo[~(np.isfinite(todo) & (todo > 0))]
+    chunks = [finite[i:i + chunk_size] for i in range(0, finite.size, chunk_size)]
+    if limits.size:
+        chunks.append(limits)  # radiation only; solved last so partial progress is visible first
+    cbody = body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric, lid=lid)
+    solver = cpt.BEMSolver(method=method)
+    _warn_mesh_resolution(cbody, finite, depth, body.g)
+    bar = tqdm(total=todo.size, unit="ω", desc="BEM", disable=not progress)
+    try:
+        with blas_single_thread(), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
+            for chunk in chunks:
+                part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
+                                    rho=body.rho, g=body.g)
+                if math.isfinite(depth):
+                    part = _fix_low_kh(part, body, dofs, directions, depth, resolution, method,
+                                       symmetric, low_kh)
+                store = part if store is None else _merge(store, part)
+                if store_path is not None:
+                    to_netcdf(store, store_path)  # checkpoint: atomic
+                bar.update(chunk.size)
+    finally:
+        bar.close()
+    return store
+
+
+def _solve_chunk(solver, cbody, omegas: np.ndarray, *, directions: np.ndarray, depth: float,
+                 rho: float, g: float) -> xr.Dataset:
+    """Solve radiation (and diffraction for finite ω > 0) problems at ``omegas``.
+
+    Returns a Dataset with ``added_mass``, ``radiation_damping`` (omega, radiating_dof,
+    influenced_dof) and ``excitation_force`` (omega, wave_direction, influenced_dof; NaN at the
+    ω = 0 / ∞ limits, where diffraction is undefined).
+    """
+    omegas = np.asarray(omegas, dtype=float)
+    dof_names = list(cbody.dofs)
+    regular = bool(np.all(np.isfinite(omegas) & (omegas > 0)))
+    coords = {"omega": omegas, "radiating_dof": dof_names, "water_depth": [depth],
+              "rho": [rho], "g": [g]}
+    if regular:
+        coords["wave_direction"] = directions
+    grid = xr.Dataset(coords=coords)
+    raw = solver.fill_dataset(grid, cbody, hydrostatics=False, progress_bar=False,
+                              _check_wavelength=False)
+    out = xr.Dataset(coords={"omega": omegas, "radiating_dof": dof_names,
+                             "influenced_dof": dof_names, "wave_direction": directions})
+    for name in ("added_mass", "radiation_damping"):
+        values = np.full((omegas.size, len(dof_names), len(dof_names)), np.nan)
+        if name in raw:
+            da = _str_dofs(_drop_scalar_dims(raw[name]))
+            values = da.transpose("omega", "radiating_dof", "influenced_dof").values
+        out[name] = (("omega", "radiating_dof", "influenced_dof"), np.asarray(values, float))
+    exc = np.full((omegas.size, directions.size, len(dof_names)), np.nan + 0j)
+    if regular and "excitation_force" in raw:
+        da = _str_dofs(_drop_scalar_dims(raw["excitation_force"]))
+        exc = da.transpose("omega", "wave_direction", "influenced_dof").values
+    out["excitation_force"] = (("omega", "wave_direction", "influenced_dof"), exc)
+    return out
+
+
+def _drop_scalar_dims(da: xr.DataArray) -> xr.DataArray:
+    """Drop Capytaine's length-1 parameter dimensions (rho, g, water_depth...)."""
+    keep = ("omega", "radiating_dof", "influenced_dof", "wave_direction")
+    return da.isel({d: 0 for d in da.dims if d not in keep}, drop=True)
+
+
+def _str_dofs(da: xr.DataArray) -> xr.DataArray:
+    """Capytaine returns categorical dof coordinates; plain strings serialise to NetCDF."""
+    for dim in ("radiating_dof", "influenced_dof"):
+        if dim in da.coords:
+            da = da.assign_coords({dim: [str(v) for v in da[dim].values]})
+    return da
+
+
+def _fix_low_kh(part, body, dofs, directions, depth, resolution, method, symmetric,
+                low_kh) -> xr.Dataset:
+    """Re-solve NaN frequencies (finite depth, small kh) with FinGreen3D on the unlidded hull."""
+    bad = np.isnan(part["added_mass"]).any(("radiating_dof", "influenced_dof")).values
+    omegas = part["omega"].values[bad]
+    if low_kh == "drop" or omegas.size == 0:
+        return part
+    import capytaine as cpt
+
+    hull = body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric, lid=False)
+    solver = cpt.BEMSolver(green_function=cpt.FinGreen3D(), method=method)
+    directions = np.asarray(part["wave_direction"].values)
+    for w in omegas:
+        if not (math.isfinite(w) and w > 0):
+            continue  # FinGreen3D has no ω = 0 / ∞ limit
+        fixed = _solve_chunk(solver, hull, np.array([w]), directions=directions, depth=depth,
+                             rho=body.rho, g=body.g)
+        for name in COEFF_VARS:
+            part[name].loc[{"omega": w}] = fixed[name].sel(omega=w)
+    return part
+
+
+def _merge(store: xr.Dataset, part: xr.Dataset) -> xr.Dataset:
+    keep = ~np.isin(store["omega"].values, part["omega"].values)
+    return xr.concat([store.isel(omega=keep), part], dim="omega").sortby("omega")
+
+
+def _warn_mesh_resolution(cbody, omegas: np.ndarray, depth: float, g: float) -> None:
+    """One warning (instead of Capytaine's per-problem log) when panels exceed λ/8."""
+    if omegas.size == 0:
+        return
+    w = float(np.max(omegas))
+    wavelength = 2 * math.pi * g / w**2  # deep-water value: shortest wave of the set
+    if wavelength < cbody.minimal_computable_wavelength:
+        warnings.warn(f"mesh is coarse for omega up to {w:.3g} rad/s: wavelength "
+                      f"{wavelength:.3g} m < 8 x largest panel radius "
+                      f"({cbody.minimal_computable_wavelength:.3g} m); high-frequency "
+                      "coefficients may be inaccurate", stacklevel=4)
+
+
+# ---------------------------------------------------------------------------- assembly
+def _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
+              include_inf, include_zero) -> xr.Dataset:
+    from hybridwsi import __version__
+
+    w_store = store["omega"].values
+    idx = [int(np.flatnonzero(_same(w_store, w))[0]) for w in omega]
+    ds = store.isel(omega=idx).assign_coords(omega=omega)
+    flags: list[str] = []
+    nan_w = ds["omega"].values[np.isnan(ds["added_mass"]).any(("radiating_dof", "influenced_dof")).values]
+    if nan_w.size:
+        flags.append(f"dropped {nan_w.size} frequencies with NaN coefficients "
+                     f"({nan_w.min():.3g}-{nan_w.max():.3g} rad/s)")
+        ds = ds.sel(omega=~np.isin(ds["omega"].values, nan_w))
+        if ds.sizes["omega"] == 0:
+            raise SolverError("the BEM returned NaN at every frequency")
+
+    def limit(w: float, on: bool) -> np.ndarray:
+        hit = np.flatnonzero(w_store == w)
+        if not on or hit.size == 0:
+            return np.full((len(dofs), len(dofs)), np.nan)
+        return store["added_mass"].isel(omega=int(hit[0])).values
+
+    a_inf, a_zero = limit(math.inf, include_inf), limit(0.0, include_zero)
+    for name, val, on in (("added_mass_inf", a_inf, include_inf),
+                          ("added_mass_zero", a_zero, include_zero)):
+        if on and np.isnan(val).any():
+            flags.append(f"{name} is NaN (not computable for this water depth/Green function)")
+
+    pair = ("radiating_dof", "influenced_dof")
+    cbody_c = _capytaine_stiffness(body, dofs, resolution)
+    ds["added_mass_inf"] = (pair, a_inf)
+    ds["added_mass_zero"] = (pair, a_zero)
+    ds["hydrostatic_stiffness"] = (pair, body.hydrostatic_stiffness(dofs))
+    ds["hydrostatic_stiffness_mesh"] = (pair, cbody_c)
+    ds["mass"] = (pair, body.mass_matrix(dofs))
+    units = {"added_mass": "kg", "radiation_damping": "N s/m", "excitation_force": "N/m",
+             "added_mass_inf": "kg", "added_mass_zero": "kg", "hydrostatic_stiffness": "N/m",
+             "hydrostatic_stiffness_mesh": "N/m", "mass": "kg"}
+    for name, unit in units.items():
+        ds[name].attrs["units"] = unit
+    ds["excitation_force"].attrs["description"] = (
+        "Froude-Krylov + diffraction per unit wave amplitude at the origin; Capytaine's time "
+        "convention F(t) = Re[F exp(-i omega t)]")
+    ds["hydrostatic_stiffness_mesh"].attrs["description"] = "Capytaine compute_hydrostatic_stiffness on the mesh"
+    ds["omega"].attrs["units"] = "rad/s"
+    ds["wave_direction"].attrs["units"] = "rad"
+    flags += _quality_flags(ds)
+    for f in flags:
+        warnings.warn(f"BEM coefficients: {f}", stacklevel=3)
+    n_hull, n_lid = _panel_counts(body, resolution, config["mesh"]["lid"])
+    ds.attrs = {
+        "source": "hybridwsi.hydro.bem.compute (Capytaine)",
+        "rho": body.rho, "g": body.g, "water_depth": depth,
+        "body": body.to_json(), "n_panels": n_hull, "n_lid_panels": n_lid,
+        "resolution": list(resolution), "method": config["solver"]["method"],
+        "symmetric": int(config["mesh"]["symmetric"]), "lid": int(config["mesh"]["lid"]),
+        "low_kh": config["solver"]["low_kh"],
+        "input_hash": input_hash, "inputs": json.dumps(config, sort_keys=True),
+        "hybridwsi_version": __version__, "capytaine_version": _pkg_version("capytaine"),
+        "quality_flags": json.dumps(flags),
+        "dropped_omega": json.dumps([float(w) for w in nan_w]),
+    }
+    return ds
+
+
+def _quality_flags(ds: xr.Dataset) -> list[str]:
+    flags = []
+    for name in COEFF_VARS:
+        n = int(np.isnan(ds[name].values).sum())
+        if n:
+            flags.append(f"{name} has {n} NaN value(s)")
+    b = ds["radiation_damping"].values
+    diag = np.diagonal(b, axis1=1, axis2=2)
+    scale = np.nanmax(np.abs(diag)) if np.isfinite(diag).any() else 0.0
+    neg = diag < -NEG_DAMPING_RTOL * scale
+    if neg.any():
+        w = ds["omega"].values[neg.any(axis=1)]
+        flags.append(f"negative diagonal radiation damping at {w.size} frequencies "
+                     f"({w.min():.3g}-{w.max():.3g} rad/s), min {diag.min():.3g} N s/m")
+    return flags
+
+
+def _capytaine_stiffness(body: FloatingSphere, dofs, resolution) -> np.ndarray:
+    """Capytaine's mesh-integrated hydrostatic stiffness (works on the symmetric mesh)."""
+    cbody = body.capytaine_body(dofs, resolution=resolution, lid=False)
+    c = cbody.compute_hydrostatic_stiffness(rho=body.rho, g=body.g)
+    return np.asarray(c.transpose("radiating_dof", "influenced_dof").values, dtype=float)
+
+
+def _panel_counts(body: FloatingSphere, resolution, lid: bool) -> tuple[int, int]:
+    hull, lid_mesh = body.mesh(resolution, lid=lid)
+    return int(hull.nb_faces), int(0 if lid_mesh is None else lid_mesh.nb_faces)

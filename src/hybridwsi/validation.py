@@ -1,0 +1,233 @@
+"""Validation of the linear (BEM/Cummins) model against the measured decay tests (paper Fig. 1).
+
+Kramer et al. (2021) dropped a half-submerged sphere (D = 0.3 m) from H0 = 0.1D, 0.3D and 0.5D.
+The error measure is the one of the blind comparison this data set comes from: the RMS of the
+heave normalised by the drop height, ``sqrt(mean((z_model/H0 − z_exp/H0)²))`` over
+``t ∈ [0, 5 Te0]``, evaluated on the experiment's time grid (the model is interpolated linearly).
+Applied to the 11 published codes in ``numerical/`` it reproduces the value quoted for LPF2 at
+0.1D (0.0107), so our model is scored exactly as they were.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from hybridwsi.errors import InputError
+
+DROPS = ("01D", "03D", "05D")
+
+
+def rms_heave_error(
+    t_model: np.ndarray,
+    zn_model: np.ndarray,
+    t_exp: np.ndarray,
+    zn_exp: np.ndarray,
+    te0: float,
+    window: tuple[float, float] = (0.0, 5.0),
+) -> float:
+    """RMS of normalised heave error over ``t/Te0 ∈ window`` on the experiment's grid.
+
+    Parameters
+    ----------
+    t_model, zn_model : ndarray
+        Model time [s] (increasing) and heave / H0 [-].
+    t_exp, zn_exp : ndarray
+        Experiment time [s] and mean heave / H0 [-].
+    te0 : float
+        Normalisation period [s].
+    window : (float, float)
+        Window in units of ``te0``.
+
+    Returns
+    -------
+    float
+        RMS error [-].
+    """
+    t_model = np.asarray(t_model, float)
+    lo, hi = window[0] * te0, window[1] * te0
+    sel = (t_exp >= lo - 1e-12) & (t_exp <= hi + 1e-12)
+    if t_model[0] > lo + 1e-9 or t_model[-1] < hi - 1e-9:
+        raise InputError(
+            f"model record [{t_model[0]:.3f}, {t_model[-1]:.3f}] s does not cover the RMS window "
+            f"[{lo:.3f}, {hi:.3f}] s"
+        )
+    zi = np.interp(t_exp[sel], t_model, zn_model)
+    return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
+
+
+@dataclass
+class DecayValidation:
+    """Results of :func:`run_decay_validation`.
+
+    Attributes
+    ----------
+    rms : dict
+        ``{drop: {"linear": rms, "nonlinear_hydrostatics": rms}}``.
+    codes : dict
+        ``{drop: {code: rms}}`` for the published codes, computed the same way.
+    curves : xarray.Dataset
+        Normalised heave of the experiment (mean, CI bounds) and of our models on the
+        experiment's time grid, per drop; the data behind Fig. 1.
+    """
+
+    rms: dict[str, dict[str, float]]
+    codes: dict[str, dict[str, float]]
+    curves: xr.Dataset
+    inputs: dict[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"01D": {"rms": ..., "rms_nonlinear_hydrostatics": ..., "codes": {...}}, ...}``."""
+        out: dict[str, Any] = {}
+        for drop in self.rms:
+            out[drop] = {
+                "rms": self.rms[drop]["linear"],
+                "rms_nonlinear_hydrostatics": self.rms[drop].get("nonlinear_hydrostatics"),
+                "codes": self.codes.get(drop, {}),
+            }
+        return out
+
+    def to_markdown(self) -> str:
+        """Table of RMS(heave/H0) over [0, 5 Te0]: ours next to the published codes."""
+        codes = sorted({c for d in self.codes.values() for c in d})
+        head = "| drop | ours (linear) | ours (nonlinear hydrostatics) | " + " | ".join(codes) + " |"
+        rule = "|" + "---|" * (3 + len(codes))
+        rows = [head, rule]
+        for drop in self.rms:
+            r = self.rms[drop]
+            cells = [
+                f"{self.codes[drop][c]:.4f}" if c in self.codes.get(drop, {}) else "–" for c in codes
+            ]
+            nl = r.get("nonlinear_hydrostatics")
+            rows.append(
+                f"| {drop} | {r['linear']:.4f} | {nl:.4f} | " + " | ".join(cells) + " |"
+                if nl is not None
+                else f"| {drop} | {r['linear']:.4f} | – | " + " | ".join(cells) + " |"
+            )
+        return "\n".join(rows)
+
+
+def _measured(drop: str) -> xr.Dataset:
+    """Measured mean heave of one drop, normalised (drop height 1)."""
+    from hybridwsi import importers
+
+    path = importers.kramer_data_dir() / f"{drop}_CI95_Normalized_every5th.csv"
+    return importers.read_kramer_decay(path, drop_height=1.0)
+
+
+def published_code_files(drop: str) -> dict[str, Any]:
+    """``{code: path}`` of the published numerical results for one drop."""
+    from hybridwsi import importers
+
+    folder = importers.kramer_data_dir() / "numerical"
+    return {p.name.split("_")[0]: p for p in sorted(folder.glob(f"*_{drop}.csv"))}
+
+
+def score_published_codes(drop: str, te0: float, window=(0.0, 5.0)) -> dict[str, float]:
+    """RMS of each published code of the blind comparison for one drop."""
+    from hybridwsi import importers
+
+    exp = _measured(drop)
+    t_exp, zn_exp = exp["time"].values, exp["z"].values[:, 0]
+    out = {}
+    for code, path in published_code_files(drop).items():
+        num = importers.read_kramer_numerical(path, require_uniform=False)
+        z = num["z"].values[:, 0]
+        out[code] = rms_heave_error(num["time"].values, z / z[0], t_exp, zn_exp, te0, window)
+    return out
+
+
+def run_decay_validation(
+    coeffs: xr.Dataset,
+    *,
+    drops: tuple[str, ...] = DROPS,
+    nonlinear: bool = True,
+    dt: float | None = None,
+    progress: bool = True,
+) -> DecayValidation:
+    """Simulate the three drops with the Cummins model and score them against the experiment.
+
+    Parameters
+    ----------
+    coeffs : xarray.Dataset
+        BEM coefficients of the Kramer sphere (``hydro.bem.compute``), including A∞ and C.
+    drops : tuple of str
+        Which drops to run (``"01D"``, ``"03D"``, ``"05D"``).
+    nonlinear : bool
+        Also run with exact spherical-cap hydrostatics.
+    dt : float, optional
+        Time step [s] (default from the case file).
+    progress : bool
+        Show a progress bar over the runs.
+    """
+    from tqdm.auto import tqdm
+
+    from hybridwsi import bodies, cummins
+    from hybridwsi.cases import load_case
+
+    case = load_case("kramer2021_decay")
+    te0 = case["experiment"]["Te0"]
+    window = tuple(case["experiment"]["rms_window"])
+    sim = case["simulation"]
+    dt = float(dt or sim["dt"])
+    body = bodies.FloatingSphere.kramer2021()
+    variants = {"linear": False, **({"nonlinear_hydrostatics": True} if nonlinear else {})}
+
+    rms: dict[str, dict[str, float]] = {}
+    codes: dict[str, dict[str, float]] = {}
+    curves = []
+    jobs = [(d, v) for d in drops for v in variants]
+    bar = tqdm(jobs, desc="decay runs", disable=not progress)
+    exp_cache: dict[str, xr.Dataset] = {}
+    for drop, variant in bar:
+        h0 = case["drops"][drop]
+        if drop not in exp_cache:
+            exp_cache[drop] = _measured(drop)
+        exp = exp_cache[drop]
+        hist = cummins.simulate(
+            coeffs,
+            mass=case["body"]["mass"],
+            duration=sim["duration"],
+            dt=dt,
+            z0=h0,
+            nonlinear_hydrostatics=variants[variant],
+            body=body,
+        )
+        t_exp, zn_exp = exp["time"].values, exp["z"].values[:, 0]
+        zn = hist["z"].values[:, 0] / h0
+        rms.setdefault(drop, {})[variant] = rms_heave_error(
+            hist["time"].values, zn, t_exp, zn_exp, te0, window
+        )
+        on_grid = np.interp(t_exp, hist["time"].values, zn, left=np.nan)
+        curves.append(
+            xr.DataArray(on_grid, dims="t_exp", coords={"t_exp": t_exp / te0}).expand_dims(
+                drop_test=[drop], model=[variant]
+            )
+        )
+    for drop in drops:
+        codes[drop] = score_published_codes(drop, te0, window)
+    model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
+        "heave_over_H0"
+    ]
+    exp_ds = xr.concat(
+        [
+            xr.Dataset(
+                {
+                    "exp_mean": ("t_exp", exp_cache[d]["z"].values[:, 0]),
+                    "exp_ci95_lower": ("t_exp", exp_cache[d]["ci95_lower"].values.ravel()),
+                    "exp_ci95_upper": ("t_exp", exp_cache[d]["ci95_upper"].values.ravel()),
+                },
+                coords={"t_exp": exp_cache[d]["time"].values / te0},
+            )
+            for d in drops
+        ],
+        dim=pd.Index(list(drops), name="drop_test"),
+    )
+    ds = xr.merge([exp_ds, model])
+    ds["t_exp"].attrs.update(units="1", long_name="t / Te0")
+    ds.attrs.update(te0=te0, rms_window=str(window), dt=dt)
+    return DecayValidation(rms=rms, codes=codes, curves=ds, inputs={"dt": dt, "te0": te0})

@@ -1,0 +1,353 @@
+"""Incident waves (regular, JONSWAP, Pierson–Moskowitz) and their excitation force time series.
+
+Sign convention (Capytaine's): a complex amplitude ``X`` stands for the real signal
+``Re[X e^{-iωt}]`` (see ``capytaine.bem.airy_waves``: the incident elevation at the origin has
+complex amplitude 1 per unit wave amplitude). A wave is a sum of linear components
+
+    η(t) = Σ_j a_j cos(ω_j t + φ_j) = Re[Σ_j a_j e^{-i(ω_j t + φ_j)}]        at x = y = 0,
+
+so the excitation force of the BEM transfer function ``F_e(ω)`` [N/m] is
+
+    F_exc(t) = Re[Σ_j a_j F_e(ω_j) e^{-i(ω_j t + φ_j)}] = Σ_j a_j |F_e| cos(ω_j t + φ_j − arg F_e).
+
+(With the opposite, ``e^{+iωt}``, convention the same force reads
+``Re[Σ a_j conj(F_e) e^{i(ω_j t + φ_j)}]``.)
+
+Spectra (single-sided, in ω, [m² s/rad]):
+
+- Pierson–Moskowitz (Bretschneider form, DNV-RP-C205 eq. 3.5.5):
+  ``S_PM(ω) = 5/16 Hs² ωp⁴ ω⁻⁵ exp(−5/4 (ω/ωp)⁻⁴)``, ``ωp = 2π/Tp``; its integral is exactly
+  ``m0 = Hs²/16``.
+- JONSWAP: ``S_J(ω) = N_γ S_PM(ω) γ^{exp(−(ω−ωp)²/(2σ²ωp²))}``, σ = 0.07 (ω ≤ ωp) or 0.09;
+  ``N_γ`` is computed numerically so that ``m0 = Hs²/16`` exactly (DNV's approximation
+  ``1 − 0.287 ln γ`` is within ~1 %).
+
+A realisation uses ``n_components`` equally spaced frequencies ``ω_j`` (mid-points of bins of
+width Δω over ``omega_range``), amplitudes ``a_j = sqrt(2 S(ω_j) Δω)`` and phases uniform on
+[0, 2π) drawn from ``numpy.random.default_rng(seed)``; it repeats after ``2π/Δω``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.integrate
+import scipy.optimize
+import xarray as xr
+
+from hybridwsi.errors import InputError
+
+G = 9.81
+#: time samples per block when summing components (bounds memory to ~block × n_components)
+_BLOCK = 4096
+
+
+def _positive(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {value!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise InputError(f"{name} must be a finite positive number, got {value!r}")
+    return v
+
+
+def harmonic_sum(t: np.ndarray, amplitude: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``Re[Σ_j c_j e^{-iω_j t}]`` for complex amplitudes ``c_j``; shape (nt,) or (nt, ...).
+
+    ``amplitude`` has shape (n_components,) or (n_components, n_out).
+    """
+    t = np.asarray(t, dtype=float)
+    c = np.asarray(amplitude, dtype=complex)
+    out = np.empty((t.size, *c.shape[1:]))
+    for s in range(0, t.size, _BLOCK):  # blocks keep the (nt × n_comp) phase matrix small
+        ph = np.exp(-1j * np.outer(t[s:s + _BLOCK], omega))
+        out[s:s + _BLOCK] = np.real(ph @ c)
+    return out
+
+
+@dataclass(frozen=True)
+class WaveComponents:
+    """Linear components of a wave: ``η(t) = Σ a cos(ω t + φ)``."""
+
+    amplitude: np.ndarray  # [m]
+    omega: np.ndarray  # [rad/s]
+    phase: np.ndarray  # [rad]
+
+    @property
+    def complex_amplitude(self) -> np.ndarray:
+        """``a e^{-iφ}``, so that ``η = Re[Σ c e^{-iωt}]`` (Capytaine's convention)."""
+        return self.amplitude * np.exp(-1j * self.phase)
+
+
+class Wave:
+    """Base class: subclasses implement :meth:`components` and :meth:`to_dict`."""
+
+    direction: float = 0.0
+
+    def components(self) -> WaveComponents:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def elevation(self, t: np.ndarray) -> np.ndarray:
+        """Incident wave elevation η(t) [m] at the origin."""
+        comp = self.components()
+        return harmonic_sum(t, comp.complex_amplitude, comp.omega)
+
+    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+@dataclass
+class Regular(Wave):
+    """Regular (monochromatic) wave ``η = H/2 cos(2π t/T + phase)``.
+
+    Parameters
+    ----------
+    period : float
+        Wave period T [s].
+    height : float
+        Wave height H [m] (crest to trough, = 2 × amplitude).
+    phase : float
+        Phase φ [rad].
+    direction : float
+        Propagation direction [rad] (Capytaine's ``wave_direction``).
+    """
+
+    period: float
+    height: float
+    phase: float = 0.0
+    direction: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.period = _positive("wave period", self.period)
+        self.height = _positive("wave height", self.height)
+        if not np.isfinite(self.phase):
+            raise InputError("wave phase must be finite")
+
+    @property
+    def omega(self) -> float:
+        """Angular frequency [rad/s]."""
+        return 2 * np.pi / self.period
+
+    def spectrum(self, omega: np.ndarray) -> np.ndarray:
+        """A regular wave has a line spectrum: zero density everywhere (m0 = H²/8)."""
+        return np.zeros_like(np.asarray(omega, dtype=float))
+
+    def components(self) -> WaveComponents:
+        return WaveComponents(np.array([self.height / 2]), np.array([self.omega]),
+                              np.array([float(self.phase)]))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": "regular", **asdict(self)}
+
+
+def spectral_moment(spectrum, omega_p: float, order: int = 0) -> float:
+    """``m_n = ∫_0^∞ ω^n S(ω) dω`` by adaptive quadrature split at the peak ``omega_p``."""
+    f = lambda w: w**order * spectrum(w)  # noqa: E731
+    return (scipy.integrate.quad(f, 0, omega_p, limit=200)[0]
+            + scipy.integrate.quad(f, omega_p, np.inf, limit=200)[0])
+
+
+def _pm_shape(omega: np.ndarray, hs: float, wp: float) -> np.ndarray:
+    """Pierson–Moskowitz spectrum [m² s/rad]; zero at ω ≤ 0."""
+    w = np.asarray(omega, dtype=float)
+    out = np.zeros_like(w)
+    pos = w > 0
+    r = wp / w[pos]
+    out[pos] = 5 / 16 * hs**2 * wp**4 / w[pos] ** 5 * np.exp(-1.25 * r**4)
+    return out
+
+
+@dataclass
+class JONSWAP(Wave):
+    """Irregular JONSWAP sea state (see module docstring for the formulas).
+
+    Parameters
+    ----------
+    hs : float
+        Significant wave height Hs [m].
+    tp : float
+        Peak period Tp [s].
+    gamma : float
+        Peak enhancement factor γ ≥ 1 (3.3 by default; 1 gives Pierson–Moskowitz).
+    seed : int
+        Seed of the random phases.
+    n_components : int
+        Number of frequency components.
+    omega_range : (float, float), optional
+        Frequency band [rad/s]; default ``(0.5 ωp, 4 ωp)`` (holds > 99 % of m0 for γ = 3.3).
+    direction : float
+        Propagation direction [rad].
+    """
+
+    hs: float
+    tp: float
+    gamma: float = 3.3
+    seed: int = 0
+    n_components: int = 200
+    omega_range: tuple[float, float] | None = None
+    direction: float = 0.0
+    _norm: float = field(default=1.0, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.hs = _positive("Hs", self.hs)
+        self.tp = _positive("Tp", self.tp)
+        if not (np.isfinite(self.gamma) and self.gamma >= 1):
+            raise InputError(f"JONSWAP gamma must be >= 1, got {self.gamma}")
+        if int(self.n_components) < 1:
+            raise InputError("n_components must be >= 1")
+        self.n_components = int(self.n_components)
+        if self.omega_range is None:
+            self.omega_range = (0.5 * self.omega_p, 4.0 * self.omega_p)
+        lo, hi = (float(v) for v in self.omega_range)
+        if not (0 < lo < hi and np.isfinite(hi)):
+            raise InputError(f"omega_range must satisfy 0 < low < high, got {self.omega_range}")
+        self.omega_range = (lo, hi)
+        self._norm = 1.0
+        self._norm = self.hs**2 / 16 / spectral_moment(self.spectrum, self.omega_p)
+
+    @property
+    def omega_p(self) -> float:
+        """Peak angular frequency ωp = 2π/Tp [rad/s]."""
+        return 2 * np.pi / self.tp
+
+    def spectrum(self, omega: np.ndarray) -> np.ndarray:
+        """One-sided spectral density S(ω) [m² s/rad]."""
+        w = np.asarray(omega, dtype=float)
+        wp = self.omega_p
+        sigma = np.where(w <= wp, 0.07, 0.09)
+        peak = self.gamma ** np.exp(-((w - wp) ** 2) / (2 * sigma**2 * wp**2))
+        return self._norm * _pm_shape(w, self.hs, wp) * peak
+
+    def components(self) -> WaveComponents:
+        lo, hi = self.omega_range
+        dw = (hi - lo) / self.n_components
+        w = lo + dw * (np.arange(self.n_components) + 0.5)
+        amp = np.sqrt(2 * self.spectrum(w) * dw)
+        phase = np.random.default_rng(self.seed).uniform(0, 2 * np.pi, w.size)
+        return WaveComponents(amp, w, phase)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {k: v for k, v in asdict(self).items() if not k.startswith("_")}
+        return {"type": type(self).__name__.lower(), **d}
+
+
+class PiersonMoskowitz(JONSWAP):
+    """Pierson–Moskowitz sea state: JONSWAP with γ = 1 (fully developed sea)."""
+
+    def __init__(self, hs: float, tp: float, seed: int = 0, n_components: int = 200,
+                 omega_range: tuple[float, float] | None = None, direction: float = 0.0):
+        super().__init__(hs=hs, tp=tp, gamma=1.0, seed=seed, n_components=n_components,
+                         omega_range=omega_range, direction=direction)
+
+
+def wave_from_dict(d: dict[str, Any]) -> Wave:
+    """Rebuild a wave from :meth:`Wave.to_dict` output."""
+    d = dict(d)
+    kind = d.pop("type", None)
+    try:
+        if kind == "regular":
+            return Regular(**d)
+        if kind == "jonswap":
+            return JONSWAP(**d)
+        if kind == "piersonmoskowitz":
+            d.pop("gamma", None)
+            return PiersonMoskowitz(**d)
+    except TypeError as exc:
+        raise InputError(f"bad wave description: {exc}") from None
+    raise InputError(f"unknown wave type '{kind}' (regular, jonswap, piersonmoskowitz)")
+
+
+def dispersion_k(omega: float | np.ndarray, depth: float = np.inf, g: float = G) -> np.ndarray:
+    """Wavenumber k [rad/m] solving ``ω² = g k tanh(k h)`` (deep water: ``k = ω²/g``).
+
+    Parameters
+    ----------
+    omega : float or array
+        Angular frequency [rad/s], ≥ 0.
+    depth : float
+        Water depth h [m] (``inf`` for deep water).
+    g : float
+        Gravity [m/s²].
+    """
+    w = np.atleast_1d(np.asarray(omega, dtype=float))
+    if np.any(~np.isfinite(w)) or np.any(w < 0):
+        raise InputError("omega must be finite and >= 0")
+    if not depth > 0:
+        raise InputError(f"water depth must be > 0, got {depth}")
+    k_deep = w**2 / g
+    if np.isinf(depth):
+        return k_deep if np.ndim(omega) else k_deep[0]
+    out = np.zeros_like(w)
+    for i, (wi, kd) in enumerate(zip(w, k_deep)):
+        if wi == 0:
+            continue
+        # k lies between the deep- and shallow-water values, whichever is larger, and their sum
+        lo = max(kd, wi / np.sqrt(g * depth))
+        hi = kd + wi / np.sqrt(g * depth)
+        out[i] = scipy.optimize.brentq(lambda k: k * np.tanh(k * depth) - wi**2 / g,
+                                       lo * (1 - 1e-12), hi * (1 + 1e-12), xtol=1e-14, rtol=1e-13)
+    return out if np.ndim(omega) else out[0]
+
+
+def ramp_factor(t: np.ndarray, ramp: float) -> np.ndarray:
+    """Half-cosine ramp ``½(1 − cos(π t/T_r))`` for ``t < T_r``, 1 afterwards."""
+    t = np.asarray(t, dtype=float)
+    if ramp < 0 or not np.isfinite(ramp):
+        raise InputError(f"ramp must be a finite duration >= 0 [s], got {ramp}")
+    if ramp == 0:
+        return np.ones_like(t)
+    return np.where(t < ramp, 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, ramp) / ramp)), 1.0)
+
+
+def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float) -> xr.DataArray:
+    if "excitation_force" not in coeffs:
+        raise InputError("coefficients have no 'excitation_force'; cannot apply waves")
+    fe = coeffs["excitation_force"]
+    missing = [d for d in dofs if d not in [str(v) for v in fe["influenced_dof"].values]]
+    if missing:
+        raise InputError(f"excitation_force has no DOF {missing}")
+    if "wave_direction" in fe.dims:
+        dirs = np.asarray(fe["wave_direction"].values, dtype=float)
+        i = int(np.argmin(np.abs(np.angle(np.exp(1j * (dirs - direction))))))
+        if abs(np.angle(np.exp(1j * (dirs[i] - direction)))) > 1e-6:
+            raise InputError(f"no excitation force for wave direction {direction:g} rad "
+                             f"(have {', '.join(f'{d:g}' for d in dirs)})")
+        fe = fe.isel(wave_direction=i)
+    fe = fe.sel(influenced_dof=dofs).transpose("omega", "influenced_dof")
+    if not np.all(np.isfinite(fe.values)):
+        raise InputError("excitation_force contains NaN/inf")
+    return fe
+
+
+def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
+                     dof: str | list[str] = "Heave", *, ramp: float = 0.0) -> np.ndarray:
+    """Wave excitation force F_exc(t) [N] from the BEM transfer function.
+
+    ``F_e(ω)`` is interpolated linearly (real and imaginary parts) at the wave's component
+    frequencies, which must lie inside the coefficients' ω range; see the module docstring for
+    the sign convention. ``ramp`` [s] multiplies the force by a half-cosine ramp to avoid the
+    start-up transient.
+
+    Returns
+    -------
+    ndarray, shape (nt,) for one ``dof`` (str) or (nt, n_dof) for a list.
+    """
+    dofs = [dof] if isinstance(dof, str) else list(dof)
+    fe = _excitation_transfer(coeffs, dofs, float(getattr(wave, "direction", 0.0)))
+    w_grid = np.asarray(fe["omega"].values, dtype=float)
+    comp = wave.components()
+    keep = comp.amplitude > 0
+    w = comp.omega[keep]
+    if w.size and (w.min() < w_grid[0] * (1 - 1e-9) or w.max() > w_grid[-1] * (1 + 1e-9)):
+        raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside the "
+                         f"coefficients' range {w_grid[0]:.4g}–{w_grid[-1]:.4g} rad/s "
+                         "(narrow omega_range or recompute the BEM coefficients)")
+    vals = np.asarray(fe.values)
+    tf = np.stack([np.interp(w, w_grid, vals[:, i].real) + 1j * np.interp(w, w_grid, vals[:, i].imag)
+                   for i in range(len(dofs))], axis=1)
+    force = harmonic_sum(t, comp.complex_amplitude[keep][:, None] * tf, w)
+    force *= ramp_factor(t, ramp)[:, None]
+    return force[:, 0] if isinstance(dof, str) else force

@@ -1,0 +1,152 @@
+"""Stability settings (THEORY.md §4) against hand-derived results."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from _diag_cases import A_INF, C_HS, M
+from hybridwsi.diagnostic import (
+    Hydrostatic,
+    amplification_matrix,
+    assess,
+    lagged_step,
+    loosely_coupled_stability,
+    max_stable_dt,
+    prescribed_force_stability,
+    regress,
+    surrogate_stability,
+)
+from hybridwsi.errors import InputError
+from hybridwsi.history import make_history
+
+WN = math.sqrt(C_HS / M)
+
+
+# ------------------------------------------------------------------ (a) prescribed force
+def test_case1_drifts_case2_neutral_damping_decays():
+    case1 = prescribed_force_stability(M)
+    assert case1.verdict == "drift" and not case1.stable
+    case2 = prescribed_force_stability(M, 0.0, 0.0, C_HS)
+    assert case2.verdict == "neutral"
+    np.testing.assert_allclose(sorted(case2.eigenvalues.imag), [-WN, WN], rtol=1e-12)
+    case3 = prescribed_force_stability(M, A_INF, 0.0, C_HS)
+    np.testing.assert_allclose(np.abs(case3.eigenvalues), math.sqrt(C_HS / (M + A_INF)), rtol=1e-12)
+    damped = prescribed_force_stability(M, 0.0, 2.0, C_HS)
+    assert damped.verdict == "damped"
+    np.testing.assert_allclose(damped.eigenvalues.real, -2.0 / (2 * M), rtol=1e-10)
+    assert prescribed_force_stability(M, 0.0, 0.0, -C_HS).verdict == "unstable"
+    # damping without stiffness: offsets persist but do not grow (no Jordan block)
+    assert prescribed_force_stability(M, 0.0, 2.0, 0.0).verdict == "neutral"
+
+
+def test_two_dof_drift_only_in_the_unrestrained_direction():
+    m = np.diag([7.0, 0.1])
+    c = np.diag([700.0, 0.0])  # second DOF has no restoring force and no damping
+    rep = prescribed_force_stability(m, 0.0, 0.0, c)
+    assert rep.verdict == "drift" and rep.conditions["drift_directions"] == 1
+    assert prescribed_force_stability(m, 0.0, np.diag([0.0, 1.0]), c).verdict == "neutral"
+    json.dumps(rep.to_dict())
+
+
+def test_singular_inertia_is_an_input_error():
+    with pytest.raises(InputError, match="singular"):
+        prescribed_force_stability(1.0, -1.0)
+
+
+# ------------------------------------------------------------------ (b) surrogate in the loop
+@settings(max_examples=40, deadline=None)
+@given(
+    dm=st.floats(-5, 5).filter(lambda x: abs(x) > 1e-3),
+    db=st.floats(-5, 5).filter(lambda x: abs(x) > 1e-3),
+    dc=st.floats(-500, 500).filter(lambda x: abs(x) > 1e-2),
+)
+def test_surrogate_routh_hurwitz(dm, db, dc):
+    """1 DOF: m_eff s² + b_eff s + c_eff is Hurwitz iff all three coefficients share a sign."""
+    m, a_k, b_k, c_k = 2.0, 1.0, 0.5, 100.0
+    alpha, beta, gamma = m + a_k - dm, b_k - db, c_k - dc
+    rep = surrogate_stability(m, a_k, b_k, c_k, alpha, beta, gamma)
+    hurwitz = (dm > 0 and db > 0 and dc > 0) or (dm < 0 and db < 0 and dc < 0)
+    assert (rep.verdict == "stable") == hurwitz
+    assert rep.conditions["mass_positive"] == (dm > 0)
+    assert rep.conditions["damping_positive"] == (db > 0)
+    assert rep.conditions["stiffness_positive"] == (dc > 0)
+
+
+def test_surrogate_cancelling_inertia_is_unstable():
+    rep = surrogate_stability(M, A_INF, 0.0, C_HS, M + A_INF, 0.0, 0.0)
+    assert rep.verdict == "unstable" and "algebraic loop" in rep.message
+
+
+# ------------------------------------------------------------------ (c) lagged coupling
+@pytest.mark.parametrize("scheme", ["semi_implicit_euler", "newmark"])
+def test_added_mass_ratio_above_one_is_unstable_for_every_dt(scheme):
+    mt = M + A_INF
+    assert max_stable_dt(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, scheme) == 0.0
+    for dt in (1e-6, 1e-4, 1e-3):
+        rep = loosely_coupled_stability(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, dt, scheme)
+        assert rep.verdict == "unstable"
+        assert rep.conditions["added_mass_ratio"] == pytest.approx(1.2)
+
+
+@pytest.mark.parametrize("scheme", ["semi_implicit_euler", "newmark"])
+def test_added_mass_ratio_half_is_stable_for_small_dt(scheme):
+    mt = M + A_INF
+    rep = loosely_coupled_stability(M, A_INF, 1.0, C_HS, -0.5 * mt, 0.0, 0.0, 1e-3, scheme)
+    assert rep.verdict == "stable" and rep.spectral_radius < 1.0
+    assert rep.max_stable_dt > 1e-3
+
+
+def test_pure_lag_eigenvalue_is_alpha_over_mass():
+    """Without B, C, β, γ the lagged acceleration obeys a_n = (α/M) a_{n−1} exactly."""
+    g = amplification_matrix(np.eye(1) * 2.0, np.eye(1), np.zeros((1, 1)), np.zeros((1, 1)),
+                             np.eye(1) * -0.9, np.zeros((1, 1)), np.zeros((1, 1)), 0.01)
+    assert np.sort(np.linalg.eigvals(g).real)[0] == pytest.approx(-0.3, abs=1e-12)
+
+
+def test_symplectic_euler_limit_is_two_over_omega():
+    """Semi-implicit Euler on m z̈ + C z = 0 is stable iff Δt ≤ 2/ω_n (hand derivation)."""
+    dt_max = max_stable_dt(M, 0.0, 0.0, C_HS, 0.0, 0.0, 0.0, "semi_implicit_euler")
+    assert dt_max == pytest.approx(2.0 / WN, rel=1e-5)
+    # a surrogate stiffness γ_s changes the effective ω: limit 2/sqrt((C − γ_s)/m)
+    dt_g = max_stable_dt(M, 0.0, 0.0, C_HS, 0.0, 0.0, 0.5 * C_HS, "semi_implicit_euler")
+    assert dt_g == pytest.approx(2.0 / math.sqrt(0.5 * C_HS / M), rel=1e-5)
+
+
+def test_newmark_average_acceleration_is_unconditionally_stable():
+    assert max_stable_dt(M, A_INF, 0.0, C_HS, 0.0, 0.0, 0.0, "newmark") == math.inf
+
+
+def test_lagged_step_tracks_the_analytic_oscillator():
+    """Stepping m z̈ + C z = 0 with a lagged surrogate stiffness part γ_s converges to cos(ω t)."""
+    gamma_s = -0.3 * C_HS  # surrogate supplies 30 % of the restoring force (lagged)
+    c_k = 0.7 * C_HS
+    m = np.eye(1) * M
+    for scheme in ("semi_implicit_euler", "newmark"):
+        dt, n = 1e-4, 20000
+        z, v, a = np.array([0.01]), np.array([0.0]), np.array([-C_HS * 0.01 / M])
+        for i in range(n):
+            z, v, a = lagged_step(scheme, i * dt, dt, z, v, a, m, np.zeros((1, 1)),
+                                  np.eye(1) * c_k, lambda t, zz, vv, aa: gamma_s * zz)
+        assert z[0] == pytest.approx(0.01 * math.cos(WN * n * dt), abs=2e-4 * 0.01 * 10)
+
+
+# ------------------------------------------------------------------ assess
+def test_assess_on_a_regression_result():
+    t = np.arange(0.0, 20.0, 0.01)
+    z = 0.02 * np.sin(3.1 * t) + 0.01 * np.sin(7.3 * t)
+    zd = 0.02 * 3.1 * np.cos(3.1 * t) + 0.01 * 7.3 * np.cos(7.3 * t)
+    zdd = -0.02 * 3.1**2 * np.sin(3.1 * t) - 0.01 * 7.3**2 * np.sin(7.3 * t)
+    # a "surrogate" force with α = −2 kg, β = −1 N s/m, γ = −50 N/m
+    hist = make_history(t, z, zd, zdd, forces={"F_s": -2.0 * zdd - 1.0 * zd - 50.0 * z})
+    res = regress(hist, force="F_s")
+    out = assess(res, M, [Hydrostatic(C_HS)], dt=0.01)
+    assert out["prescribed_force"].verdict == "neutral"
+    assert out["surrogate"].verdict == "stable"  # M+2, +1, C+50 all positive
+    assert out["loosely_coupled"].conditions["added_mass_ratio"] == pytest.approx(2.0 / M, rel=1e-6)
+    json.dumps({k: v.to_dict() for k, v in out.items()})
