@@ -26,7 +26,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.history import atomic_write, to_netcdf
+from hybridwsi.history import to_netcdf
+from hybridwsi.history import write_json as _write_json
+from hybridwsi.history import write_text as _write_text
 
 PARTITION_LABELS = {
     "1": "F_tot",
@@ -59,23 +61,6 @@ def steady_state_note(case3: Table1Case, period: float, start: float) -> str:
 def _log(msg: str, progress: bool) -> None:
     if progress:
         print(f"[reproduce] {msg}", flush=True)
-
-
-def _write_json(path: Path, obj: Any) -> None:
-    text = json.dumps(obj, indent=2, default=_json_default)
-    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-
-
-def _write_text(path: Path, text: str) -> None:
-    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    return str(o)
 
 
 def _bem_coefficients(body, cfg: dict, progress: bool, water_depth: float | None = None):

@@ -13,7 +13,6 @@ output can be seen without any file.
 from __future__ import annotations
 
 import argparse
-import json
 import warnings
 from pathlib import Path
 from typing import Any
@@ -234,7 +233,7 @@ def _print(out: dict[str, Any], result: Any, notes_count: int) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.history import atomic_write
+    from hybridwsi.history import write_json
 
     out, result = diagnose(args)
     n_notes = len(out["warnings"]) - len(result.warnings)
@@ -242,33 +241,6 @@ def run(args: argparse.Namespace) -> int:
     if args.example and not args.known:
         print("try: hybridwsi diagnose --example --known hydrostatic=692.2 --known added_mass=3.5")
     if args.json:
-        text = json.dumps(_finite(out), indent=2, allow_nan=False, default=_json_default)
-
-        def write(tmp: str) -> None:
-            Path(tmp).write_text(text + "\n", encoding="utf-8")
-
-        try:
-            atomic_write(args.json, write)
-        except OSError as exc:
-            raise InputError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+        write_json(args.json, out)
         print(f"wrote {args.json}")
     return 0
-
-
-def _finite(obj: Any) -> Any:
-    """JSON has no inf/NaN: replace them by None, recursively."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, (float, np.floating)) and not np.isfinite(obj):
-        return None
-    return obj
-
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    return str(obj)

@@ -35,6 +35,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import math
 import os
 import warnings
@@ -111,6 +112,7 @@ def compute(
     symmetric: bool = True,
     lid: bool = True,
     low_kh: str = "fingreen",
+    low_kh_panels: int | None = 1600,
     use_cache: bool = True,
     chunk_size: int = CHUNK_SIZE,
 ) -> xr.Dataset:
@@ -144,6 +146,9 @@ def compute(
         Use the axisymmetric mesh / add a waterplane lid (irregular frequencies).
     low_kh : {"fingreen", "drop"}
         Finite depth: re-solve NaN frequencies with FinGreen3D, or drop them.
+    low_kh_panels : int or None
+        Hull panels for the FinGreen3D re-solves (default 1600; None: the main mesh). Those
+        frequencies have waves much longer than the body, where a coarse hull is converged.
     use_cache : bool
         Read and write the cache (False: solve everything, write nothing).
     chunk_size : int
@@ -166,9 +171,16 @@ def compute(
     if int(chunk_size) < 1:
         raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
     resolution = body.panel_resolution(resolution if resolution is not None else n_panels)
+    # FinGreen3D costs ~10 s per frequency on 6400 panels; the waves it is needed for (kh < 0.13,
+    # wavelength > 40 body diameters in 0.9 m) are resolved by a much coarser hull
+    low_res = resolution
+    if low_kh_panels is not None:
+        coarse = body.panel_resolution(int(low_kh_panels))
+        low_res = coarse if coarse[0] * coarse[1] < resolution[0] * resolution[1] else resolution
 
     config = _configuration(body, depth, dofs, directions, resolution, method, symmetric, lid,
                             low_kh)
+    config["solver"]["low_kh_resolution"] = list(low_res)
     config_hash = _sha256(config)
     input_hash = _sha256({**config, "omega": omega.tolist(), "include_inf": include_inf,
                           "include_zero": include_zero})
@@ -190,6 +202,7 @@ def compute(
         store = _solve_missing(body, todo, store, store_path if use_cache else None, dofs=dofs,
                                directions=directions, depth=depth, resolution=resolution,
                                method=method, symmetric=symmetric, lid=lid, low_kh=low_kh,
+                               low_res=low_res,
                                progress=progress, chunk_size=int(chunk_size))
     ds = _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
                    include_inf, include_zero)
@@ -302,8 +315,21 @@ def blas_single_thread() -> Iterator[None]:
         yield
 
 
+@contextlib.contextmanager
+def _quiet_capytaine():
+    """Silence Capytaine's per-problem "Skipped ..." log lines: the frequencies it skips (low kh
+    in finite depth) are re-solved or dropped below, with our own single warning."""
+    logger = logging.getLogger("capytaine")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, resolution, method,
-                   symmetric, lid, low_kh, progress, chunk_size) -> xr.Dataset:
+                   symmetric, lid, low_kh, progress, chunk_size, low_res=None) -> xr.Dataset:
     """Solve ``todo`` frequencies chunk by chunk, checkpointing into ``store_path``."""
     import capytaine as cpt
     from tqdm.auto import tqdm
@@ -318,14 +344,14 @@ def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, re
     _warn_mesh_resolution(cbody, finite, depth, body.g)
     bar = tqdm(total=todo.size, unit="ω", desc="BEM", disable=not progress)
     try:
-        with blas_single_thread(), warnings.catch_warnings():
+        with blas_single_thread(), warnings.catch_warnings(), _quiet_capytaine():
             warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
             for chunk in chunks:
                 part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
                                     rho=body.rho, g=body.g)
                 if math.isfinite(depth):
-                    part = _fix_low_kh(part, body, dofs, directions, depth, resolution, method,
-                                       symmetric, low_kh)
+                    part = _fix_low_kh(part, body, dofs, directions, depth,
+                                       low_res or resolution, method, symmetric, low_kh)
                 store = part if store is None else _merge(store, part)
                 if store_path is not None:
                     to_netcdf(store, store_path)  # checkpoint: atomic
