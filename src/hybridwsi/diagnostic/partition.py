@@ -93,7 +93,11 @@ def _peak_omega(hist: xr.Dataset) -> float:
 
 
 def _memory(hist: xr.Dataset, coeffs: xr.Dataset | None) -> KnownComponent | None:
-    from hybridwsi.hydro.statespace import RadiationMemory, RadiationSS, fit_radiation_ss
+    from hybridwsi.hydro.statespace import (
+        RadiationMemory,
+        RadiationSS,
+        fit_radiation_ss,
+    )
 
     if "radiation_ss" in hist.attrs:
         return RadiationMemory(RadiationSS.from_dict(json.loads(hist.attrs["radiation_ss"])))

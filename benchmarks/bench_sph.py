@@ -1,0 +1,95 @@
+"""Particle updates per second of the hybridwsi SPH tank vs PySPH's stock WCSPH scheme.
+
+Both are measured in this process on the same particle positions (our case's fluid and wall
+particles), with OpenMP on ``OMP_NUM_THREADS`` threads (default 2). The ratio ours/stock is
+what to compare between machines; absolute rates depend on the load.
+
+    OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--steps2d 100] [--steps3d 10]
+
+The first run compiles 4 kernel sets (about a minute each); later runs use PySPH's cache.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+os.environ.setdefault("OMP_NUM_THREADS", "2")
+
+
+def _time_steps(solver, n_particles: int, steps: int, dt: float) -> float:
+    integ = solver.integrator
+    integ.initial_acceleration(0.0, dt)
+    integ.step(0.0, dt)  # warm-up (first neighbour build)
+    t0 = time.perf_counter()
+    for i in range(steps):
+        integ.step((i + 1) * dt, dt)
+    return n_particles * steps / (time.perf_counter() - t0)
+
+
+def ours(case, steps: int) -> float:
+    from hybridwsi.sph.run import make_solver
+
+    return _time_steps(make_solver(case, openmp=True), case.n_particles, steps, case.dt)
+
+
+def stock(case, steps: int) -> float:
+    """PySPH's WCSPHScheme (dynamic boundary, Tait, Monaghan AV, XSPH) on the same points."""
+    from compyle.config import get_config
+    from pysph.base.kernels import WendlandQuintic
+    from pysph.base.nnps import LinkedListNNPS
+    from pysph.base.utils import get_particle_array_wcsph
+    from pysph.sph.scheme import WCSPHScheme
+
+    get_config().use_openmp = True
+    f, w = case.fluid, case.wall
+    xyz = ("x", "y", "z")[: case.dim]
+    fluid = get_particle_array_wcsph(name="fluid", **{k: f.get(k) for k in xyz}, h=case.h,
+                                     m=f.get("m"), rho=f.get("rho"))
+    bnd = get_particle_array_wcsph(name="boundary", **{k: w.get(k) for k in xyz}, h=case.h,
+                                   m=w.get("m"), rho=case.rho0)
+    g = dict(zip(("gx", "gy", "gz"), case.gvec))
+    scheme = WCSPHScheme(["fluid"], ["boundary"], dim=case.dim, rho0=case.rho0, c0=case.c0,
+                         h0=case.h, hdx=case.hdx, alpha=case.alpha, hg_correction=True, **g)
+    scheme.setup_properties([fluid, bnd])
+    kernel = WendlandQuintic(dim=case.dim)
+    scheme.configure_solver(kernel=kernel, dt=case.dt, tf=1.0)
+    solver = scheme.get_solver()
+    solver.set_disable_output(True)
+    solver.set_parallel_manager(None)
+    nnps = LinkedListNNPS(dim=case.dim, particles=[fluid, bnd], radius_scale=kernel.radius_scale,
+                          fixed_h=True)
+    solver.setup(particles=[fluid, bnd], equations=scheme.get_equations(), nnps=nnps,
+                 kernel=kernel, fixed_h=True)
+    return _time_steps(solver, case.n_particles, steps, case.dt)
+
+
+def main() -> None:
+    from hybridwsi.sph import tank
+
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--steps2d", type=int, default=100)
+    ap.add_argument("--steps3d", type=int, default=10)
+    ap.add_argument("--skip3d", action="store_true")
+    a = ap.parse_args()
+    cases = [("2D hydrostatic tank 2.5 m x 1 m, dp = 0.01 m",
+              tank.hydrostatic(dp=0.01, depth=1.0, length=2.5, init="hydrostatic"), a.steps2d)]
+    if not a.skip3d:
+        cases.append(("3D sphere decay, quarter domain 1.2 x 1.2 x 0.9 m, dp = 0.025 m",
+                      tank.decay3d(dp=0.025), a.steps3d))
+    print(f"OMP_NUM_THREADS={os.environ['OMP_NUM_THREADS']}")
+    for desc, case, steps in cases:
+        r_ours = ours(case, steps)
+        r_stock = stock(case, steps)
+        print(f"{desc}: {case.n_particles} particles ({case.fluid.get_number_of_particles()} "
+              f"fluid), {steps} steps")
+        print(f"  hybridwsi tank (Adami walls, density diffusion, body coupling): "
+              f"{r_ours:.3g} particle-updates/s")
+        print(f"  PySPH stock WCSPHScheme (dynamic boundary):                    "
+              f"{r_stock:.3g} particle-updates/s")
+        print(f"  ratio ours / stock = {r_ours / r_stock:.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,13 @@
+#!/bin/sh
+# 3D heave decay of the Kramer et al. (2021) sphere (drop 0.1 D) on a quarter domain.
+# Hours on 2 cores at dp = 0.03 m (~60k particles, ~30k steps for 5 Te0). Resumable: re-run
+# the same command after an interruption. Then compare with the experiment.
+#   DP=0.03 OUT=results/sph sh scripts/sph_decay3d.sh
+set -e
+DP=${DP:-0.03}
+OUT=${OUT:-results/sph}
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-2}
+mkdir -p "$OUT"
+hybridwsi sph decay3d --dp "$DP" --out "$OUT/decay3d_dp$DP.nc" --resume --openmp \
+    --checkpoint-every 600
+python scripts/sph_compare_kramer.py "$OUT/decay3d_dp$DP.nc"

@@ -1,0 +1,271 @@
+"""Driver of the SPH wave tank: equations, time loop, progress, checkpoints, resume, output.
+
+``run_case(case, out)`` advances a :class:`~hybridwsi.sph.tank.SPHCase` with PySPH's PEC
+integrator at a fixed time step, samples the body and probes every ``case.output_dt`` and
+returns (and atomically writes) a TimeHistory. Checkpoints hold every particle property and
+constant plus the samples so far; a resumed run continues bit-for-bit where the interrupted
+one stopped (fixed dt, accelerations restored, no re-evaluation at restart).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time as _time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi.errors import InputError, SolverError
+from hybridwsi.history import atomic_write, make_history, to_netcdf
+from hybridwsi.sph.tank import SPHCase, free_surface
+
+CHECKPOINT_VERSION = 1
+
+
+def make_equations(case: SPHCase) -> list:
+    """The equation groups shared by all cases (parameter values differ, code does not).
+
+    Groups are named: PySPH otherwise numbers them with a process-wide counter that ends up in
+    the generated source, so a second case in the same process would be recompiled (~1 min).
+    """
+    from pysph.sph.basic_equations import ContinuityEquation, XSPHCorrection
+    from pysph.sph.equation import Group
+    from pysph.sph.wc.basic import MomentumEquation, TaitEOS
+
+    from hybridwsi.sph.equations import (
+        BodyForceReduce,
+        DampingZone,
+        DensityDiffusionFourtakas,
+        GravityRamp,
+        WallForce,
+        WallPressureAdami,
+    )
+
+    gx, gy, gz = case.gvec
+    grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
+    x0, x1, sigma = case.damping
+    return [
+        Group(equations=[TaitEOS("fluid", None, rho0=case.rho0, c0=case.c0, gamma=case.gamma)],
+              real=False, name="eos"),
+        Group(equations=[WallPressureAdami("wall", ["fluid"], rho0=case.rho0, c0=case.c0,
+                                           gamma=case.gamma, **grav)], real=False,
+              name="wall_bc"),
+        Group(equations=[
+            ContinuityEquation("fluid", ["fluid", "wall"]),
+            DensityDiffusionFourtakas("fluid", ["fluid"], delta=case.delta, c0=case.c0,
+                                      rho0=case.rho0, **grav),
+            MomentumEquation("fluid", ["fluid", "wall"], c0=case.c0, alpha=case.alpha,
+                             beta=0.0),
+            GravityRamp("fluid", None, **grav),
+            DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma),
+            XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps),
+            WallForce("wall", ["fluid"], alpha=case.alpha),
+        ], name="rates"),
+        Group(equations=[BodyForceReduce("wall", None)], name="body"),
+    ]
+
+
+def make_solver(case: SPHCase, openmp: bool = False):
+    """Compile (or load from PySPH's cache) and set up a PySPH Solver for ``case``."""
+    from compyle.config import get_config
+    from pysph.base.kernels import WendlandQuintic
+    from pysph.base.nnps import LinkedListNNPS
+    from pysph.solver.solver import Solver
+    from pysph.sph.integrator import PECIntegrator
+    from pysph.sph.integrator_step import WCSPHStep
+
+    from hybridwsi.sph.equations import WallStep
+
+    get_config().use_openmp = bool(openmp)
+    kernel = WendlandQuintic(dim=case.dim)
+    integrator = PECIntegrator(fluid=WCSPHStep(), wall=WallStep())
+    solver = Solver(dim=case.dim, integrator=integrator, kernel=kernel, dt=case.dt, tf=case.tf)
+    solver.set_disable_output(True)
+    solver.set_parallel_manager(None)  # serial run (what Application does without MPI)
+    particles = [case.fluid, case.wall]
+    nnps = LinkedListNNPS(dim=case.dim, particles=particles, radius_scale=kernel.radius_scale,
+                          fixed_h=True)
+    solver.setup(particles=particles, equations=make_equations(case), nnps=nnps,
+                 kernel=kernel, fixed_h=True)
+    return solver
+
+
+# --------------------------------------------------------------------------- sampling
+def _sample(case: SPHCase, t: float) -> dict[str, Any]:
+    b = case.wall.body
+    row: dict[str, Any] = {"time": t, "z": b[0], "zdot": b[1], "zddot": b[2],
+                           "F_tot": b[6], "F_fluid": b[5]}
+    row["eta"] = [free_surface(case.fluid, x, case.dp, case.dim, y) - case.depth
+                  for x, y in case.probes]
+    for name, fn in case.monitors.items():
+        row[name] = fn(case.fluid, case.wall)
+    return row
+
+
+def _rows_to_arrays(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
+    if not rows:
+        return {}
+    return {k: np.asarray([r[k] for r in rows], dtype=float) for k in rows[0]}
+
+
+def _arrays_to_rows(arrs: dict[str, np.ndarray]) -> list[dict[str, Any]]:
+    if not arrs:
+        return []
+    n = len(arrs["time"])
+    return [{k: (v[i].tolist() if v.ndim > 1 else float(v[i])) for k, v in arrs.items()}
+            for i in range(n)]
+
+
+def history_from_rows(case: SPHCase, rows: list[dict[str, Any]]) -> xr.Dataset:
+    """Build the TimeHistory (z, zdot, zddot, F_tot, F_fluid, eta(time, probe), monitors)."""
+    a = _rows_to_arrays(rows)
+    if case.body_mass is None:
+        # no floating body: the body constants hold placeholders, report zeros
+        for k in ("z", "zdot", "zddot", "F_tot", "F_fluid"):
+            a[k] = np.zeros_like(a["time"])
+    import pysph
+
+    inputs = dict(case.inputs, dt=case.dt, c0=case.c0, h=case.h, alpha=case.alpha,
+                  delta=case.delta, n_particles=case.n_particles, engine="PySPH",
+                  engine_version=pysph.__version__)
+    ds = make_history(a["time"], a["z"], a["zdot"], a["zddot"],
+                      forces={"F_tot": a["F_tot"], "F_fluid": a["F_fluid"]},
+                      dof=["Heave"], mass=case.body_mass, source=f"hybridwsi.sph:{case.name}",
+                      inputs=inputs, check=len(a["time"]) >= 8)
+    ds["zddot"].attrs["note"] = "body acceleration at the last force evaluation (mid-step)"
+    if case.body_mass is None:
+        ds.attrs["note"] = "no floating body in this case: z, zdot, zddot, forces are zero"
+    if case.probes:
+        ds["eta"] = (("time", "probe"), np.atleast_2d(a["eta"]).reshape(len(a["time"]), -1),
+                     {"units": "m", "long_name": "free-surface elevation at probes"})
+        ds = ds.assign_coords(probe_x=("probe", [p[0] for p in case.probes], {"units": "m"}))
+    for name in case.monitors:
+        ds[name] = ("time", a[name], {"long_name": name})
+    return ds
+
+
+# --------------------------------------------------------------------------- checkpoints
+def _inputs_key(case: SPHCase) -> str:
+    return json.dumps(case.inputs, sort_keys=True, default=str)
+
+
+def write_checkpoint(path: Path, case: SPHCase, count: int, rows: list[dict[str, Any]]) -> None:
+    """Atomically save every particle property/constant, the step count and the samples."""
+    data: dict[str, np.ndarray] = {"_count": np.array(count), "_version": np.array(
+        CHECKPOINT_VERSION), "_inputs": np.array(_inputs_key(case))}
+    for pa in (case.fluid, case.wall):
+        name = pa.name
+        for prop in pa.properties:
+            data[f"{name}/p/{prop}"] = pa.get(prop)
+        for const in pa.constants:
+            data[f"{name}/c/{const}"] = np.array(getattr(pa, const))
+    for k, v in _rows_to_arrays(rows).items():
+        data[f"rows/{k}"] = v
+
+    def writer(tmp: str) -> None:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **data)
+
+    atomic_write(path, writer)
+
+
+def read_checkpoint(path: Path, case: SPHCase) -> tuple[int, list[dict[str, Any]]]:
+    """Load a checkpoint into ``case``'s arrays; return (step count, samples so far)."""
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            data = {k: f[k] for k in f.files}
+    except Exception as exc:  # noqa: BLE001 - zip/npz errors come in many types
+        raise InputError(f"cannot read checkpoint {path}: {exc}") from None
+    if str(data["_inputs"]) != _inputs_key(case):
+        raise InputError(f"checkpoint {path} was written for other inputs; delete it or "
+                         "run with the same options")
+    for pa in (case.fluid, case.wall):
+        n = pa.get_number_of_particles()
+        for prop in pa.properties:
+            arr = data[f"{pa.name}/p/{prop}"]
+            if arr.shape[0] != n:
+                raise InputError(f"checkpoint {path} has {arr.shape[0]} '{pa.name}' "
+                                 f"particles, the case has {n}")
+            getattr(pa, prop)[:] = arr
+        for const in pa.constants:
+            getattr(pa, const)[:] = data[f"{pa.name}/c/{const}"]
+    rows = _arrays_to_rows({k[5:]: v for k, v in data.items() if k.startswith("rows/")})
+    return int(data["_count"]), rows
+
+
+# --------------------------------------------------------------------------- driver
+def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
+             checkpoint: str | os.PathLike | None = None, checkpoint_every: float = 120.0,
+             resume: bool = False, progress: bool = True, openmp: bool = False,
+             stop_after_steps: int | None = None) -> xr.Dataset:
+    """Run an SPH case and return its TimeHistory.
+
+    Parameters
+    ----------
+    case : SPHCase
+        From :func:`hybridwsi.sph.tank.build`.
+    out : path, optional
+        NetCDF file written atomically at the end.
+    checkpoint : path, optional
+        Checkpoint file (default ``<out>.ckpt.npz`` when ``out`` is given).
+    checkpoint_every : float
+        Wall-clock interval between checkpoints [s].
+    resume : bool
+        Continue from the checkpoint when it exists.
+    progress : bool
+        Show a tqdm progress bar (simulated time).
+    openmp : bool
+        Compile with OpenMP (threads from ``OMP_NUM_THREADS``).
+    stop_after_steps : int, optional
+        Stop (after writing a checkpoint) once this many steps are done; for tests of resume.
+        The returned history then holds the samples so far and ``out`` is not written.
+    """
+    from tqdm.auto import tqdm
+
+    dt = case.dt
+    n_total = round(case.tf / dt)
+    nsub = max(1, round(case.output_dt / dt))
+    if checkpoint is None and out is not None:
+        checkpoint = Path(str(out) + ".ckpt.npz")
+    ckpt = Path(checkpoint) if checkpoint is not None else None
+    solver = make_solver(case, openmp=openmp)
+    integ = solver.integrator
+    count, rows = 0, []
+    if resume and ckpt is not None and ckpt.is_file():
+        count, rows = read_checkpoint(ckpt, case)
+    else:
+        # PEC uses the accelerations of the previous evaluation in its predictor
+        integ.initial_acceleration(0.0, dt)
+        rows = [_sample(case, 0.0)]
+    last_ckpt = _time.monotonic()
+    bar = tqdm(total=n_total, initial=count, disable=not progress, unit="step",
+               desc=f"SPH {case.name} ({case.n_particles} particles)", mininterval=1.0)
+    try:
+        while count < n_total:
+            if stop_after_steps is not None and count >= stop_after_steps:
+                break
+            integ.step(count * dt, dt)
+            count += 1
+            if count % nsub == 0:
+                rows.append(_sample(case, count * dt))
+                if not np.isfinite(rows[-1]["F_tot"]) or not np.all(np.isfinite(case.fluid.rho)):
+                    raise SolverError(f"SPH run {case.name} diverged at t = {count * dt:.4g} s")
+            bar.update(1)
+            if ckpt is not None and _time.monotonic() - last_ckpt > checkpoint_every:
+                write_checkpoint(ckpt, case, count, rows)
+                last_ckpt = _time.monotonic()
+    except KeyboardInterrupt:
+        if ckpt is not None:
+            write_checkpoint(ckpt, case, count, rows)
+        raise
+    finally:
+        bar.close()
+    if ckpt is not None:
+        write_checkpoint(ckpt, case, count, rows)
+    hist = history_from_rows(case, rows)
+    if out is not None and count >= n_total:
+        to_netcdf(hist, out)
+    return hist

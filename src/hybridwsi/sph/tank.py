@@ -1,0 +1,433 @@
+"""Case builder for the SPH numerical wave tank (2D and 3D).
+
+Every case uses the same two particle arrays (``fluid``, ``wall``) and the same equation set
+(:func:`make_equations`); cases differ only in geometry, wall flags and parameter values.
+PySPH therefore compiles one kernel per dimension and reuses it (compile ~1 min, cached in
+``~/.pysph``).
+
+Coordinates: x along the tank, vertical axis y in 2D and z in 3D, free surface at the still
+water depth ``depth`` above the bottom (bottom at vertical coordinate 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from hybridwsi.errors import InputError
+from hybridwsi.sph import wavemaker
+
+RHO_WATER = 998.2
+G = 9.81
+CASES = ("hydrostatic", "dam_break", "waves2d", "decay3d", "regular3d", "decay2d")
+
+# Kramer et al. (2021) sphere (see /work/shared/data/kramer2021_sphere_decay/README.md)
+SPHERE_D = 0.300
+SPHERE_MASS = 7.056
+KRAMER_G = 9.82
+KRAMER_DEPTH = 0.9
+
+
+@dataclass
+class SPHCase:
+    """Everything a run needs: particles, numerical parameters, probes and monitors."""
+
+    name: str
+    dim: int
+    dp: float
+    depth: float
+    tf: float
+    fluid: Any
+    wall: Any
+    rho0: float = 1000.0
+    c0: float = 20.0
+    gamma: float = 7.0
+    g: float = G
+    hdx: float = 1.3
+    alpha: float = 0.1
+    delta: float = 0.1
+    xsph_eps: float = 0.0
+    cfl: float = 0.2
+    t_ramp: float = 0.0
+    damping: tuple[float, float, float] = (1e30, 2e30, 0.0)
+    output_dt: float = 0.01
+    probes: list[tuple[float, float]] = field(default_factory=list)
+    monitors: dict[str, Callable[[Any, Any], float]] = field(default_factory=dict)
+    body_mass: float | None = None
+    inputs: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def h(self) -> float:
+        """Smoothing length [m]."""
+        return self.hdx * self.dp
+
+    @property
+    def dt(self) -> float:
+        """Fixed time step [s]: CFL on the artificial sound speed (fixed so resume is exact)."""
+        return self.cfl * self.h / self.c0
+
+    @property
+    def vaxis(self) -> int:
+        """Index of the vertical axis (1 = y in 2D, 2 = z in 3D)."""
+        return self.dim - 1
+
+    @property
+    def gvec(self) -> tuple[float, float, float]:
+        gv = [0.0, 0.0, 0.0]
+        gv[self.vaxis] = -self.g
+        return tuple(gv)
+
+    @property
+    def n_particles(self) -> int:
+        return int(self.fluid.get_number_of_particles() + self.wall.get_number_of_particles())
+
+
+# --------------------------------------------------------------------------- lattices
+def _grid(lo: list[float], hi: list[float], dp: float) -> np.ndarray:
+    """Cell-centred lattice points (i + 1/2) dp inside the box [lo, hi] (one row per point)."""
+    axes = [np.arange(a + 0.5 * dp, b - 1e-9 * dp, dp) for a, b in zip(lo, hi)]
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.stack([m.ravel() for m in mesh], axis=1)
+
+
+def _tank_walls(lo: list[float], hi: list[float], dp: float, nlayers: int,
+                open_sides: tuple[int, ...] = ()) -> np.ndarray:
+    """Wall particles (nlayers thick) around the box [lo, hi] except its top; ``open_sides``
+    lists side indices (0 = x-min, 1 = x-max, 2 = y-min, 3 = y-max in 3D) without a wall."""
+    t = nlayers * dp
+    dim = len(lo)
+    outer_lo = [a - t for a in lo]
+    outer_hi = [b + t for b in hi]
+    outer_hi[-1] = hi[-1]  # no lid
+    pts = _grid(outer_lo, outer_hi, dp)
+    inside = np.all((pts > np.array(lo)) & (pts < np.array(hi)), axis=1)
+    # the still-air region above the tank walls' interior is inside too (open top)
+    keep = ~inside
+    for side in open_sides:
+        ax, upper = divmod(side, 2)
+        if ax >= dim - 1:
+            continue
+        keep &= ~(pts[:, ax] > hi[ax]) if upper else ~(pts[:, ax] < lo[ax])
+    return pts[keep]
+
+
+def _nlayers(hdx: float) -> int:
+    # kernel support 2h must be covered by wall particles
+    return math.ceil(2.0 * hdx)
+
+
+def _arrays(case_dim: int, fluid_pts: np.ndarray, wall_pts: np.ndarray, flags: np.ndarray,
+            dp: float, h: float, rho0: float, c0: float, gamma: float, g: float,
+            depth: float, hydrostatic: bool):
+    """PySPH particle arrays with every property the equation set needs."""
+    from pysph.base.utils import get_particle_array_wcsph
+
+    from hybridwsi.sph.equations import N_BODY, N_PISTON, WALL_PROPS
+
+    def coords(pts):
+        out = {"x": pts[:, 0], "y": pts[:, 1]}
+        if case_dim == 3:
+            out["z"] = pts[:, 2]
+        return out
+
+    vol = dp ** case_dim
+    zf = fluid_pts[:, case_dim - 1]
+    B = rho0 * c0 * c0 / gamma
+    if hydrostatic:
+        p = rho0 * g * np.maximum(depth - zf, 0.0)
+        rho = rho0 * (p / B + 1.0) ** (1.0 / gamma)
+    else:
+        rho = np.full(len(zf), rho0)
+    # mass from the reference density: the initial hydrostatic compression then gives the
+    # right pressure without changing the particle volume lattice
+    fluid = get_particle_array_wcsph(name="fluid", **coords(fluid_pts), h=h, m=rho0 * vol,
+                                     rho=rho)
+    wall = get_particle_array_wcsph(name="wall", **coords(wall_pts), h=h, m=rho0 * vol,
+                                    rho=rho0)
+    for pa in (fluid, wall):
+        for prop in WALL_PROPS:
+            if prop not in pa.properties:
+                pa.add_property(prop)
+        pa.cs[:] = c0
+    wall.flag[:] = flags
+    wall.xi[:], wall.yi[:], wall.zi[:] = wall.x, wall.y, wall.z
+    wall.add_constant("body", np.zeros(N_BODY))
+    wall.add_constant("piston", np.zeros(N_PISTON))
+    wall.body[7] = 1.0  # mass placeholder (never divides by zero)
+    wall.body[10] = case_dim - 1
+    wall.body[11] = g
+    wall.body[8] = 1.0
+    wall.body[13] = 1.0
+    return fluid, wall
+
+
+def _c0(g: float, height: float, factor: float) -> float:
+    """Artificial sound speed: factor x sqrt(g H) (10 keeps density changes near 1 %)."""
+    return factor * math.sqrt(g * height)
+
+
+# --------------------------------------------------------------------------- probes
+def free_surface(fluid, x: float, dp: float, dim: int, y: float = 0.0) -> float:
+    """Highest fluid particle within one dp (horizontally) of the probe, plus dp/2 [m]."""
+    ax = dim - 1
+    xs = fluid.x
+    sel = np.abs(xs - x) < dp
+    if dim == 3:
+        sel &= np.abs(fluid.y - y) < dp
+    if not np.any(sel):
+        return float("nan")
+    vert = (fluid.y, fluid.z)[ax - 1]
+    return float(vert[sel].max() + 0.5 * dp)
+
+
+# --------------------------------------------------------------------------- cases
+def hydrostatic(dp: float = 0.02, depth: float = 0.4, length: float = 0.8,
+                tf: float = 1.0, c0_factor: float = 10.0, t_ramp: float = 0.3,
+                init: str = "uniform") -> SPHCase:
+    """2D tank at rest. ``init="uniform"`` starts from rho0 everywhere with gravity ramped
+    over ``t_ramp`` [s] (a real test of the wall BC); ``"hydrostatic"`` starts settled."""
+    if init not in ("uniform", "hydrostatic"):
+        raise InputError(f"init must be 'uniform' or 'hydrostatic', got {init!r}")
+    _check_dp(dp, depth)
+    hdx, rho0, g = 1.3, 1000.0, G
+    c0 = _c0(g, depth, c0_factor)
+    nl = _nlayers(hdx)
+    fl = _grid([0.0, 0.0], [length, depth], dp)
+    wl = _tank_walls([0.0, 0.0], [length, depth + 4 * dp], dp, nl)
+    fluid, wall = _arrays(2, fl, wl, np.zeros(len(wl)), dp, hdx * dp, rho0, c0, 7.0, g, depth,
+                          hydrostatic=(init == "hydrostatic"))
+    case = SPHCase("hydrostatic", 2, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
+                   hdx=hdx, t_ramp=(t_ramp if init == "uniform" else 0.0))
+
+    def p_bottom(fluid, wall):
+        # mean pressure of the wall's first layer under the middle half of the tank
+        sel = (wall.y > -dp) & (wall.y < 0) & (wall.x > 0.25 * length) & (wall.x < 0.75 * length)
+        return float(np.mean(wall.p[sel]))
+
+    def p_fluid_bottom(fluid, wall):
+        # fluid particles of the lowest row, extrapolated by dp/2 to the bottom
+        sel = (fluid.y < dp) & (fluid.x > 0.25 * length) & (fluid.x < 0.75 * length)
+        return float(np.mean(fluid.p[sel]) + rho0 * g * 0.5 * dp)
+
+    case.monitors = {"p_bottom": p_bottom, "p_fluid_bottom": p_fluid_bottom}
+    case.inputs = {"case": "hydrostatic", "dp": dp, "depth": depth, "length": length, "tf": tf,
+                       "c0_factor": c0_factor, "t_ramp": t_ramp, "init": init}
+    return case
+
+
+def dam_break(dp: float = 0.0125, a: float = 0.25, tf: float = 0.5,
+              c0_factor: float = 10.0) -> SPHCase:
+    """2D dam break: water column of width a [m] and height 2a (Martin & Moyce's n^2 = 2)
+    at the left end of a tank 6a long, released at t = 0 (dry bed)."""
+    _check_dp(dp, a)
+    hdx, rho0, g = 1.3, 1000.0, G
+    height = 2.0 * a
+    c0 = _c0(g, height, c0_factor) * math.sqrt(2.0)  # ~10 x the dam-break front speed
+    nl = _nlayers(hdx)
+    L = 6.0 * a
+    fl = _grid([0.0, 0.0], [a, height], dp)
+    wl = _tank_walls([0.0, 0.0], [L, height + 2 * a], dp, nl)
+    fluid, wall = _arrays(2, fl, wl, np.zeros(len(wl)), dp, hdx * dp, rho0, c0, 7.0, g, height,
+                          hydrostatic=True)
+    case = SPHCase("dam_break", 2, dp, height, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
+                   hdx=hdx, output_dt=0.005)
+
+    def front(fluid, wall):
+        # leading edge: the largest x among particles touching the floor, plus dp/2
+        sel = fluid.y < 3 * dp
+        return float(fluid.x[sel].max() + 0.5 * dp)
+
+    case.monitors = {"front": front}
+    case.inputs = {"case": "dam_break", "dp": dp, "a": a, "tf": tf, "c0_factor": c0_factor}
+    return case
+
+
+def waves2d(dp: float = 0.02, depth: float = 0.4, period: float = 1.0, height: float = 0.03,
+            length: float | None = None, tf: float = 10.0, t_ramp: float | None = None,
+            c0_factor: float = 10.0, probes: tuple[float, ...] | None = None,
+            alpha: float = 0.02) -> SPHCase:
+    """2D piston wave flume with a damping zone of one wavelength at the far end.
+
+    Paddle stroke from the Biésel transfer function; probes default to 1 and 1.5 wavelengths
+    from the paddle.
+    """
+    _check_dp(dp, depth)
+    if height / dp < 1.0:
+        raise InputError(f"wave height {height} m is below one particle spacing dp = {dp} m")
+    hdx, rho0, g = 1.3, 1000.0, G
+    k = wavemaker.wavenumber(period, depth, g)
+    lam = 2 * math.pi / k
+    stroke = wavemaker.piston_stroke(height, period, depth, g)
+    L = length if length is not None else 3.0 * lam
+    c0 = _c0(g, depth, c0_factor)
+    nl = _nlayers(hdx)
+    fl = _grid([0.0, 0.0], [L, depth], dp)
+    # bottom extends under the paddle's travel; the x-min wall (the paddle) is built apart
+    margin = 0.5 * stroke + 2 * dp
+    wl = _tank_walls([-margin, 0.0], [L, depth + 2 * height + 4 * dp], dp, nl, open_sides=(0,))
+    wl = wl[wl[:, 0] > -margin]  # drop the unused x-min corner
+    paddle = _grid([-nl * dp, 0.0], [0.0, depth + 2 * height + 4 * dp], dp)
+    pts = np.vstack([wl, paddle])
+    flags = np.r_[np.zeros(len(wl)), np.ones(len(paddle))]
+    fluid, wall = _arrays(2, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
+                          hydrostatic=True)
+    wall.piston[3:6] = stroke, period, (2.0 * period if t_ramp is None else t_ramp)
+    omega = 2 * math.pi / period
+    x_probes = probes if probes is not None else (1.0 * lam, 1.5 * lam)
+    case = SPHCase("waves2d", 2, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
+                   alpha=alpha, damping=(L - lam, L, 3.0 * omega), output_dt=min(0.01, period / 40),
+                   probes=[(float(x), 0.0) for x in x_probes])
+    case.inputs = {"case": "waves2d", "dp": dp, "depth": depth, "period": period, "height": height,
+                       "length": L, "tf": tf, "t_ramp": float(wall.piston[5]), "c0_factor": c0_factor,
+                       "stroke": stroke, "wavelength": lam, "probes": list(map(float, x_probes)),
+                       "alpha": alpha}
+    return case
+
+
+def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass: float,
+               z0: float, half_width: float, tf: float, g: float, c0_factor: float,
+               free: bool, piston: tuple[float, float, float] | None = None,
+               length: float | None = None, x_body: float = 0.0,
+               damping: tuple[float, float, float] = (1e30, 2e30, 0.0),
+               probes: list[tuple[float, float]] | None = None) -> SPHCase:
+    """Half-submerged circle (2D) or sphere (3D, quarter domain with symmetry planes x = 0 and
+    y = 0 unless a paddle is used, then only y = 0) released from z0 [m] above equilibrium."""
+    _check_dp(dp, radius)
+    hdx, rho0 = 1.3, RHO_WATER
+    c0 = _c0(g, depth, c0_factor)
+    nl = _nlayers(hdx)
+    v = dim - 1
+    # horizontal extent: x in [x_lo, x_hi], y in [0, half_width] (3D)
+    if piston is None:
+        x_lo, x_hi = (0.0 if dim == 3 else -half_width), half_width
+        open_sides: tuple[int, ...] = ()
+    else:
+        x_lo, x_hi = 0.0, float(length)
+        open_sides = (0,)
+    lo = [x_lo] + ([0.0] if dim == 3 else []) + [0.0]
+    hi = [x_hi] + ([half_width] if dim == 3 else []) + [depth]
+    top = depth + radius + 4 * dp
+    centre = np.zeros(dim)
+    centre[0] = x_body
+    centre[v] = depth + z0  # released z0 above equilibrium (half submerged)
+    # one lattice for fluid and body so that the gap between them is one dp, as at flat walls
+    hi_all = list(hi)
+    hi_all[-1] = top
+    pts_all = _grid(lo, hi_all, dp)
+    r = np.linalg.norm(pts_all - centre, axis=1)
+    fl = pts_all[(r >= radius) & (pts_all[:, v] < depth)]
+    # body: a shell nl particles thick (inner particles never see the fluid)
+    body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
+    wlo, whi = list(lo), list(hi)
+    whi[-1] = top
+    if piston is not None:
+        wlo[0] = -(0.5 * piston[0] + 2 * dp)
+    walls = _tank_walls(wlo, whi, dp, nl, open_sides=open_sides)
+    if piston is not None:
+        walls = walls[walls[:, 0] > wlo[0]]
+        plo = [-nl * dp] + ([0.0] if dim == 3 else []) + [0.0]
+        phi = [0.0] + ([half_width] if dim == 3 else []) + [top]
+        paddle = _grid(plo, phi, dp)
+    else:
+        paddle = np.zeros((0, dim))
+    # symmetry planes are walls without the outer x/y-min layers in 3D: keep them (free slip
+    # is approximated by the Adami wall, see report); no extra work needed here
+    pts = np.vstack([walls, paddle, body])
+    flags = np.r_[np.zeros(len(walls)), np.ones(len(paddle)), np.full(len(body), 2.0)]
+    fluid, wall = _arrays(dim, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
+                          hydrostatic=True)
+    scale = 1.0 if dim == 2 else (2.0 if piston is not None else 4.0)
+    b = wall.body
+    # whole-body mass [kg]; BodyForceReduce scales the simulated part's force up by ``scale``
+    b[0], b[7], b[8], b[9] = z0, mass, scale, 1.0 if free else 0.0
+    # symmetry planes for the body force: bit 1 -> x = 0, bit 2 -> y = 0 (3D only)
+    b[15] = 0.0 if dim == 2 else (2.0 if piston is not None else 3.0)
+    # equilibrium positions (the stepper places body particles at xi + z e_v)
+    (wall.yi, wall.zi)[v - 1][flags == 2] -= z0
+    if piston is not None:
+        wall.piston[3:6] = piston
+    case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
+                   body_mass=mass, damping=damping, probes=probes or [],
+                   output_dt=0.005)
+    return case
+
+
+def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_d: float = 0.1,
+            half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
+            free: bool = True) -> SPHCase:
+    """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
+    mass = RHO_WATER * math.pi * radius ** 2 / 2.0
+    case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
+                      half_width, tf, G, c0_factor, free)
+    case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
+                       "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
+                       "mass_per_length": mass}
+    return case
+
+
+def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1.2,
+            z0_over_d: float = 0.1, tf: float = 5 * 0.7561, c0_factor: float = 10.0,
+            free: bool = True) -> SPHCase:
+    """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D) on a quarter
+    domain with symmetry planes x = 0 and y = 0; walls at ``half_width`` [m]."""
+    case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
+                      z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free)
+    case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
+                       "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
+                       "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G}
+    return case
+
+
+def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.75,
+              height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
+              c0_factor: float = 10.0) -> SPHCase:
+    """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
+    narrow flume (half width, symmetry plane y = 0) with a piston and a damping zone."""
+    g = KRAMER_G
+    k = wavemaker.wavenumber(period, depth, g)
+    lam = 2 * math.pi / k
+    stroke = wavemaker.piston_stroke(height, period, depth, g)
+    length = 4.0 * lam
+    x_body = 2.0 * lam
+    case = _body_case("regular3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS, 0.0, half_width,
+                      tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
+                      length=length, x_body=x_body,
+                      damping=(length - lam, length, 3.0 * 2 * math.pi / period),
+                      probes=[(x_body - 0.5 * lam, 0.5 * half_width)])
+    case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
+                       "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
+                       "wavelength": lam, "x_body": x_body}
+    return case
+
+
+def _check_dp(dp: float, size: float) -> None:
+    if not (isinstance(dp, (int, float)) and math.isfinite(dp) and dp > 0):
+        raise InputError(f"dp must be a positive number of metres, got {dp!r}")
+    if size / dp < 4:
+        raise InputError(f"dp = {dp} m is too coarse: the case needs at least 4 particles "
+                         f"across {size} m")
+
+
+BUILDERS: dict[str, Callable[..., SPHCase]] = {
+    "hydrostatic": hydrostatic,
+    "dam_break": dam_break,
+    "waves2d": waves2d,
+    "decay2d": decay2d,
+    "decay3d": decay3d,
+    "regular3d": regular3d,
+}
+
+
+def build(name: str, **kwargs: Any) -> SPHCase:
+    """Build a case by name with keyword overrides (``None`` values are ignored)."""
+    if name not in BUILDERS:
+        raise InputError(f"unknown SPH case {name!r}; choose one of {', '.join(BUILDERS)}")
+    kwargs = {k: v for k, v in kwargs.items() if v is not None}
+    try:
+        return BUILDERS[name](**kwargs)
+    except TypeError as exc:
+        raise InputError(f"bad option for case {name!r}: {exc}") from None

@@ -1,0 +1,699 @@
+"""Hybrid rollout: the Cummins-type ODE with the force network in the loop.
+
+For each case (a batch, evaluated in one torch call per network evaluation)::
+
+    (m + A_k) z̈ = Σ_known F_i(t, z, ż, x) + F_prescribed(t) + F_net(features),
+
+where the known components (hydrostatics, damping, radiation memory states ``x``...) are
+:class:`~hybridwsi.diagnostic.components.KnownComponent` objects, ``A_k`` their
+acceleration-proportional part moved to the left-hand side, and ``F_net`` the network.
+
+Time stepping: Newmark average acceleration (trapezoidal in z, ż, and in the internal states
+``x``), with the new acceleration found by fixed-point iteration with Aitken relaxation.
+
+- ``mode="lagged"`` (loosely coupled): the network sees the kinematics of the previous step,
+  ``F_net^{n+1} = N(x^n)``; only the known physics is iterated.
+- ``mode="implicit"``: the network sees the current step, ``F_net^{n+1} = N(x^{n+1})``, and
+  is re-evaluated inside the fixed point (it converges only while ``|alpha_s| < m + A_k``).
+
+Before rolling out, :func:`check_stability` linearises the network (autograd) and computes the
+spectral radius of the *same* step map with the network replaced by its Jacobian (all feature
+lags included), and THEORY.md §4b-c verdicts from :mod:`hybridwsi.diagnostic.stability`.
+A partition predicted unstable raises :class:`UnstablePartitionError` unless ``force=True``
+(then it only warns).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi.diagnostic.components import (
+    AddedMass,
+    Hydrostatic,
+    KnownComponent,
+    LinearDamping,
+    QuadraticDamping,
+    as_matrix,
+    summed_linear_coefficients,
+)
+from hybridwsi.diagnostic.integrators import check_scheme, lagged_step
+from hybridwsi.errors import InputError, SolverError
+from hybridwsi.history import make_history, time_step
+from hybridwsi.surrogate.features import channel_array
+from hybridwsi.surrogate.linearise import feature_jacobian, linearise
+from hybridwsi.surrogate.network import ForceNetwork, torch
+
+MODES = ("lagged", "implicit")
+#: |z| beyond this many times the reference amplitude (or non-finite) counts as blown up
+BLOWUP_FACTOR = 20.0
+#: rms of the second difference of z̈ above this fraction of the reference rms z̈ is the
+#: saw-tooth (period 2Δt) mode of an unstable lagged coupling, bounded only by the saturating
+#: network; a resolved smooth signal has (ωΔt)² << 1 of it
+SAWTOOTH_RATIO = 1.0
+
+
+class UnstablePartitionError(SolverError):
+    """The hybrid scheme is predicted unstable for this partition (pass force=True to run)."""
+
+
+class PrescribedForce(KnownComponent):
+    """A known force given as a time series in the history (e.g. ``F_exc`` from BEM).
+
+    It has no state dependence, so ``linear_coefficients`` are zero. In :func:`rollout` its
+    series is read from each case history and added as a prescribed force.
+    """
+
+    name = "prescribed"
+
+    def __init__(self, variable: str = "F_exc") -> None:
+        self.variable = variable
+
+    def force(self, hist: xr.Dataset) -> np.ndarray:
+        if self.variable not in hist:
+            raise InputError(f"history has no '{self.variable}' for the prescribed force")
+        return np.asarray(hist[self.variable].values, dtype=float)
+
+    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        z = np.zeros((n_dof, n_dof))
+        return z, z.copy(), z.copy()
+
+    def ode_force(self, t, z, zdot, x) -> np.ndarray:
+        raise InputError(f"prescribed force '{self.variable}' is a time series; the solver "
+                         "must read it from the history (hybrid rollout does)")
+
+    def describe(self) -> str:
+        return f"prescribed({self.variable})"
+
+
+# ---------------------------------------------------------------------- batched physics
+class BatchedPhysics:
+    """Known components evaluated for a batch of cases, states ``(n_cases, n)`` arrays.
+
+    Linear terms, quadratic damping and radiation memory are vectorised; any other
+    component falls back to a loop over cases through its ``ode_force``/``state_derivative``.
+    """
+
+    def __init__(self, mass: np.ndarray, known: Sequence[KnownComponent], n_dof: int) -> None:
+        self.n_dof = n_dof
+        self.known = list(known)
+        a_k, _, _ = summed_linear_coefficients(self.known, n_dof)
+        self.m_eff = as_matrix(mass, n_dof, "mass") + a_k
+        try:
+            self.m_inv = np.linalg.inv(self.m_eff)
+        except np.linalg.LinAlgError:
+            raise InputError("m + A_k is singular; check the mass and added mass") from None
+        self.b_lin = np.zeros((n_dof, n_dof))
+        self.c_lin = np.zeros((n_dof, n_dof))
+        self.quad = np.zeros(n_dof)
+        self.ss: list[tuple[slice, np.ndarray, np.ndarray, np.ndarray]] = []
+        self.other: list[tuple[slice, KnownComponent]] = []
+        n = 0
+        for comp in self.known:
+            if isinstance(comp, PrescribedForce):
+                continue  # a time series: added by the rollout as a prescribed force
+            if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)):
+                _, b, c = comp.linear_coefficients(n_dof)
+                self.b_lin += b
+                self.c_lin += c
+            elif type(comp) is QuadraticDamping:
+                self.quad += np.diag(as_matrix(comp.value, n_dof, comp.name))
+            elif hasattr(comp, "ss") and comp.n_states:  # hydro.statespace.RadiationMemory
+                sl = slice(n, n + comp.n_states)
+                self.ss.append((sl, comp.ss.A, comp.ss.B, comp.ss.C))
+                n += comp.n_states
+            else:
+                self.other.append((slice(n, n + comp.n_states), comp))
+                n += comp.n_states
+        self.n_states = n
+        self.other_states = any(comp.n_states for _, comp in self.other)
+        self._trap: dict[float, list] = {}
+
+    def ss_trapezoid(self, dt: float) -> list:
+        """Per state-space block ``(slice, (I - dt/2 A)^-1, I + dt/2 A, B)`` (cached per dt)."""
+        if dt not in self._trap:
+            blocks = []
+            for sl, a, b, _ in self.ss:
+                eye = np.eye(a.shape[0])
+                blocks.append((sl, np.linalg.inv(eye - 0.5 * dt * a), eye + 0.5 * dt * a, b))
+            self._trap[dt] = blocks
+        return self._trap[dt]
+
+    def force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Known force without its acceleration part [N], (n_cases, n_dof)."""
+        f = -v @ self.b_lin.T - z @ self.c_lin.T - self.quad * np.abs(v) * v
+        for sl, _, _, c in self.ss:
+            f -= x[:, sl] @ c.T
+        for sl, comp in self.other:
+            f += np.stack([comp.ode_force(t, z[i], v[i], x[i, sl]) for i in range(len(z))])
+        return f
+
+    def explicit_force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The known force minus its linear ``-B_k v - C_k z`` part [N] (treated explicitly)."""
+        return self.force(t, z, v, x) + v @ self.b_lin.T + z @ self.c_lin.T
+
+    def state_derivative(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+        dx = np.zeros_like(x)
+        for sl, a, b, _ in self.ss:
+            dx[:, sl] = x[:, sl] @ a.T + v @ b.T
+        for sl, comp in self.other:
+            if comp.n_states:
+                dx[:, sl] = np.stack([comp.state_derivative(t, z[i], v[i], x[i, sl])
+                                      for i in range(len(z))])
+        return dx
+
+    def linearised(self) -> BatchedPhysics:
+        """The same physics with nonlinear memoryless components replaced by their
+        ``linear_coefficients`` (used for the stability prediction)."""
+        known = []
+        for comp in self.known:
+            if isinstance(comp, PrescribedForce):
+                continue
+            if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)) or (
+                    hasattr(comp, "ss") and comp.n_states):
+                known.append(comp)
+            else:
+                _, b, c = comp.linear_coefficients(self.n_dof)
+                known += [LinearDamping(b), Hydrostatic(c)]
+        return BatchedPhysics(self.m_eff - summed_linear_coefficients(known, self.n_dof)[0],
+                              known, self.n_dof)
+
+
+# ------------------------------------------------------------------------------- stepper
+@dataclass
+class _State:
+    z: np.ndarray  # (nc, nd)
+    v: np.ndarray
+    a: np.ndarray
+    x: np.ndarray  # (nc, n_states)
+    buf: np.ndarray  # (nc, span, n_channels), lag 0 first
+
+
+ForceFn = Callable[[np.ndarray], np.ndarray]  # features (nc, n_feat) -> force (nc, nd)
+
+
+class _Stepper:
+    """One step of the hybrid ODE, shared by the rollout and its stability map.
+
+    ``lagged`` calls :func:`hybridwsi.diagnostic.integrators.lagged_step` (the integrator
+    whose amplification matrix :mod:`hybridwsi.diagnostic.stability` analyses) with the
+    network, the radiation-memory force and nonlinear known terms as the explicit force on the
+    start-of-step state; the linear known part (M = m + A_k, B_k, C_k) is implicit.
+    ``implicit`` uses Newmark average acceleration with the network in the fixed point.
+    Internal states (radiation memory) advance by the trapezoidal rule.
+    """
+
+    def __init__(self, phys: BatchedPhysics, spec, dt: float, mode: str, net_force: ForceFn,
+                 scheme: str = "newmark", max_iter: int = 50, tol: float = 1e-9) -> None:
+        if mode not in MODES:
+            raise InputError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
+        self.phys, self.spec, self.dt, self.mode = phys, spec, float(dt), mode
+        self.scheme = check_scheme(scheme)
+        self.net_force, self.max_iter, self.tol = net_force, int(max_iter), float(tol)
+        self.kin_idx = {name: [spec.channels.index((name, k)) for k in range(spec.n_dof)]
+                        for name in ("z", "zdot", "zddot") if name in spec.inputs}
+        self.eta_idx = [spec.channels.index(("eta", k)) for k in range(spec.n_probe)] \
+            if "eta" in spec.inputs else []
+        self.iterations: list[int] = []
+
+    def row(self, z, v, a, eta) -> np.ndarray:
+        """Feature channels of one time step, (nc, n_channels)."""
+        out = np.empty((z.shape[0], self.spec.n_channels))
+        for name, val in (("z", z), ("zdot", v), ("zddot", a)):
+            if name in self.kin_idx:
+                out[:, self.kin_idx[name]] = val
+        if self.eta_idx:
+            out[:, self.eta_idx] = eta
+        return out
+
+    def feat(self, buf: np.ndarray) -> np.ndarray:
+        """Network features of a buffer: the taps ``0, stride, ...``, flattened lag-major."""
+        return buf[:, :: self.spec.stride].reshape(len(buf), -1)
+
+    @staticmethod
+    def shifted(buf: np.ndarray, row: np.ndarray) -> np.ndarray:
+        return np.concatenate([row[:, None, :], buf[:, :-1, :]], axis=1)
+
+    def _states(self, s: _State, t0: float, v1: np.ndarray, z1: np.ndarray,
+                g0: np.ndarray | None) -> np.ndarray:
+        """Trapezoidal update of the internal states (fixed point; linear ones converge fast)."""
+        phys, dt = self.phys, self.dt
+        if not phys.n_states:
+            return s.x
+        if not phys.other_states:  # linear state space: the trapezoidal rule solved exactly
+            x1 = np.empty_like(s.x)
+            for sl, lhs_inv, rhs, b in phys.ss_trapezoid(dt):
+                x1[:, sl] = (s.x[:, sl] @ rhs.T + 0.5 * dt * (s.v + v1) @ b.T) @ lhs_inv.T
+            return x1
+        x1 = s.x + dt * g0
+        for _ in range(3):
+            x1 = s.x + 0.5 * dt * (g0 + phys.state_derivative(t0 + dt, z1, v1, x1))
+        return x1
+
+    def step(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
+        if self.mode == "lagged":
+            return self._lagged(s, t1, f_pre, eta1)
+        return self._implicit(s, t1, f_pre, eta1)
+
+    def _lagged(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
+        phys, t0 = self.phys, t1 - self.dt
+        f_net = self.net_force(self.feat(s.buf))
+        # explicit part on the start-of-step state; the prescribed force is a known function
+        # of time, so it is taken at the end of the step (no coupling lag to analyse)
+        f_x = f_net + f_pre + phys.explicit_force(t0, s.z, s.v, s.x)
+        z1, v1, a1 = lagged_step(self.scheme, t0, self.dt, s.z.T, s.v.T, s.a.T, phys.m_eff,
+                                 phys.b_lin, phys.c_lin, lambda *_: f_x.T)
+        z1, v1, a1 = z1.T, v1.T, a1.T
+        g0 = phys.state_derivative(t0, s.z, s.v, s.x) if phys.n_states else None
+        x1 = self._states(s, t0, v1, z1, g0)
+        self.iterations.append(1)
+        return _State(z1, v1, a1, x1, self.shifted(s.buf, self.row(z1, v1, a1, eta1)))
+
+    def _implicit(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
+        dt, m_inv, phys = self.dt, self.phys.m_inv, self.phys
+        t0 = t1 - dt
+        g0 = phys.state_derivative(t0, s.z, s.v, s.x) if phys.n_states else None
+        a, x1 = s.a.copy(), s.x
+        r_prev, omega = None, 1.0
+        for it in range(1, self.max_iter + 1):
+            v1 = s.v + 0.5 * dt * (s.a + a)
+            z1 = s.z + dt * s.v + 0.25 * dt * dt * (s.a + a)
+            x1 = self._states(s, t0, v1, z1, g0)
+            buf1 = self.shifted(s.buf, self.row(z1, v1, a, eta1))
+            f_net = self.net_force(self.feat(buf1))
+            a_new = (phys.force(t1, z1, v1, x1) + f_pre + f_net) @ m_inv.T
+            r = a_new - a
+            # Aitken's dynamic relaxation (Kuettler & Wall 2008) for the interface fixed point
+            if r_prev is not None:
+                dr = r - r_prev
+                den = float(np.sum(dr * dr))
+                if den > 0:
+                    omega = float(np.clip(-omega * np.sum(r_prev * dr) / den, -2.0, 2.0))
+            a = a + omega * r
+            r_prev = r
+            if not np.all(np.isfinite(a)) or \
+                    float(np.max(np.abs(r))) <= self.tol * (1.0 + float(np.max(np.abs(a)))):
+                break
+        self.iterations.append(it)
+        v1 = s.v + 0.5 * dt * (s.a + a)
+        z1 = s.z + dt * s.v + 0.25 * dt * dt * (s.a + a)
+        x1 = self._states(s, t0, v1, z1, g0)
+        return _State(z1, v1, a, x1, self.shifted(s.buf, self.row(z1, v1, a, eta1)))
+
+
+def _torch_force(net: ForceNetwork) -> ForceFn:
+    """Fast inference closure: normalisation folded into the first/last layer, raw
+    ``addmm``/activation calls (tiny networks are dominated by per-call overhead)."""
+    layers = [mod for mod in net.model_ if isinstance(mod, torch.nn.Linear)]
+    acts = [mod for mod in net.model_ if not isinstance(mod, torch.nn.Linear)]
+    with torch.no_grad():
+        ws = [lin.weight.detach().clone() for lin in layers]
+        bs = [lin.bias.detach().clone() for lin in layers]
+        # x_n = (x - m)/s  ->  W x_n + b = (W/s) x + (b - W m/s)
+        bs[0] = bs[0] - ws[0] @ (net._xm / net._xs)
+        ws[0] = ws[0] / net._xs
+        # y = y_n * ys + ym
+        ws[-1] = ws[-1] * net._ys[:, None]
+        bs[-1] = bs[-1] * net._ys + net._ym
+        wts = [w.T.contiguous() for w in ws]
+    act = type(acts[0]) if acts else None
+    fn = {torch.nn.Tanh: torch.tanh, torch.nn.ReLU: torch.relu}.get(act)
+
+    def f(x: np.ndarray) -> np.ndarray:
+        with torch.inference_mode():
+            h = torch.from_numpy(np.ascontiguousarray(x))
+            for k, (w, b) in enumerate(zip(wts, bs)):
+                h = torch.addmm(b, h, w)
+                if k < len(wts) - 1:
+                    h = fn(h) if fn is not None else acts[k](h)
+            return h.numpy()
+    return f
+
+
+# ------------------------------------------------------------------- stability prediction
+@dataclass
+class StabilityPrediction:
+    """Predicted stability of a hybrid rollout.
+
+    Attributes
+    ----------
+    spectral_radius : float
+        Of the linearised one-step map (network replaced by its averaged feature Jacobian,
+        all lags included) of the very scheme the rollout uses.
+    stable : bool
+        ``spectral_radius <= 1 + tol`` (and, for ``implicit``, a contracting fixed point).
+    alpha_s, beta_s, gamma_s : ndarray
+        Averaged lag-0 sensitivities of the network (THEORY.md §4b).
+    added_mass_ratio : float
+        ``max |eig((m + A_k)^{-1} alpha_s)|``: >= 1 is the loosely coupled added-mass
+        instability (THEORY.md §4c), and for ``implicit`` the fixed point diverges.
+    theory : dict
+        Verdicts of :mod:`hybridwsi.diagnostic.stability` when that module is available.
+    """
+
+    mode: str
+    dt: float
+    spectral_radius: float
+    stable: bool
+    alpha_s: np.ndarray
+    beta_s: np.ndarray
+    gamma_s: np.ndarray
+    added_mass_ratio: float
+    continuous_stable: bool
+    theory: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"mode": self.mode, "dt": self.dt, "spectral_radius": self.spectral_radius,
+                "stable": bool(self.stable), "alpha_s": self.alpha_s.tolist(),
+                "beta_s": self.beta_s.tolist(), "gamma_s": self.gamma_s.tolist(),
+                "added_mass_ratio": self.added_mass_ratio,
+                "continuous_stable": bool(self.continuous_stable), "theory": self.theory}
+
+
+def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarray,
+                scheme: str = "newmark") -> np.ndarray:
+    """Matrix of the one-step map on (z, v, a, x, buffer lags 0..w-2) for a linear network
+    ``F = jac @ features`` (eta channels carry no state: they are inputs)."""
+    nd, ns, w, nch = spec.n_dof, phys.n_states, spec.span, spec.n_channels
+    n_buf = (w - 1) * nch
+    dim = 3 * nd + ns + n_buf
+    stepper = _Stepper(phys, spec, dt, mode, lambda x: x @ jac.T, scheme, max_iter=200, tol=1e-13)
+
+    def unpack(vec: np.ndarray) -> _State:
+        z, v, a = vec[:, :nd], vec[:, nd:2 * nd], vec[:, 2 * nd:3 * nd]
+        x = vec[:, 3 * nd:3 * nd + ns]
+        rest = vec[:, 3 * nd + ns:].reshape(len(vec), w - 1, nch)
+        buf = np.concatenate([stepper.row(z, v, a, 0.0)[:, None, :], rest], axis=1)
+        return _State(z, v, a, x, buf)
+
+    def pack(s: _State) -> np.ndarray:
+        return np.concatenate([s.z, s.v, s.a, s.x, s.buf[:, :-1].reshape(len(s.z), -1)], axis=1)
+
+    basis = np.eye(dim)  # all basis vectors as one batch: the map is linear
+    out = pack(stepper.step(unpack(basis), dt, np.zeros((dim, nd)), np.zeros((dim, spec.n_probe))))
+    return out.T
+
+
+def check_stability(
+    net: ForceNetwork,
+    reference: xr.Dataset | Sequence[xr.Dataset],
+    *,
+    mass: float | np.ndarray,
+    known: Sequence[KnownComponent],
+    dt: float | None = None,
+    mode: str = "lagged",
+    scheme: str = "newmark",
+    tol: float = 1e-6,
+    stride: int = 5,
+) -> StabilityPrediction:
+    """Predict whether the hybrid rollout is stable, from the network's linearisation.
+
+    Parameters
+    ----------
+    net : ForceNetwork
+        Fitted network of the partition's residual force.
+    reference : TimeHistory or list
+        States at which the network is linearised (averaged Jacobian), e.g. training data.
+    mass : float or array
+        Rigid-body mass [kg].
+    known : sequence of KnownComponent
+        The partition's known components.
+    dt : float, optional
+        Time step [s] (default: the reference's).
+    mode : {"lagged", "implicit"}
+    scheme : {"newmark", "semi_implicit_euler"}
+        Integrator of the lagged mode (:mod:`hybridwsi.diagnostic.integrators`).
+    tol : float
+        Margin on the spectral radius.
+    """
+    refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
+    dt = float(dt if dt is not None else time_step(refs[0]))
+    nd = net.n_dof_
+    phys = BatchedPhysics(mass, known, nd)
+    lin_phys = phys.linearised()
+    from hybridwsi.surrogate.features import build_features
+
+    x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
+    jac = feature_jacobian(net, x).mean(0)
+    rho = float(np.max(np.abs(np.linalg.eigvals(_linear_map(lin_phys, net.spec_, dt, mode, jac, scheme)))))
+    lin = linearise(net, refs[0], stride=stride)
+    if len(refs) > 1:
+        lins = [linearise(net, h, stride=stride) for h in refs]
+        lin.alpha, lin.beta, lin.gamma = (np.mean([getattr(s, k) for s in lins], 0)
+                                          for k in ("alpha", "beta", "gamma"))
+    ratio = float(np.max(np.abs(np.linalg.eigvals(phys.m_inv @ lin.alpha))))
+    a_k, b_k, c_k = summed_linear_coefficients(list(known), nd)
+    m = as_matrix(mass, nd, "mass")
+    cont = _continuous_stable(m + a_k - lin.alpha, b_k - lin.beta, c_k - lin.gamma)
+    stable = rho <= 1.0 + tol and (mode == "lagged" or ratio < 1.0)
+    theory = _theory_verdicts(m, a_k, b_k, c_k, lin, dt, scheme)
+    return StabilityPrediction(mode, dt, rho, bool(stable), lin.alpha, lin.beta, lin.gamma,
+                               ratio, cont, theory)
+
+
+def _continuous_stable(m: np.ndarray, b: np.ndarray, c: np.ndarray) -> bool:
+    """Eigenvalues of ``m s^2 + b s + c`` in the closed left half-plane (THEORY.md §4b)."""
+    nd = m.shape[0]
+    try:
+        mi = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return False
+    comp = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-mi @ c, -mi @ b]])
+    return bool(np.max(np.linalg.eigvals(comp).real) <= 1e-9)
+
+
+def _theory_verdicts(m, a_k, b_k, c_k, lin, dt, scheme) -> dict:
+    """THEORY.md §4b-c from diagnostic.stability, when that module is importable."""
+    try:
+        from hybridwsi.diagnostic import stability
+    except ImportError:
+        return {}
+    out: dict[str, Any] = {}
+    for key, call in (
+        ("surrogate", lambda: stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)),
+        ("loosely_coupled", lambda: stability.loosely_coupled_stability(
+            m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma, dt, scheme)),
+    ):
+        try:
+            res = call()
+        except Exception as exc:  # report, never hide, a failure of the other module
+            out[key] = {"error": f"{type(exc).__name__}: {exc}"}
+            continue
+        out[key] = res.to_dict() if hasattr(res, "to_dict") else res
+    return out
+
+
+# ---------------------------------------------------------------------------------- rollout
+@dataclass
+class RolloutResult:
+    """Hybrid trajectories of a batch of cases.
+
+    Attributes
+    ----------
+    histories : list of TimeHistory
+        One per case, with ``F_net`` (network force) and ``F_known`` (known force) [N].
+    blew_up : ndarray of bool
+        Per case: observed unstable, i.e. non-finite state, |z| > BLOWUP_FACTOR x reference
+        max |z|, or a saw-tooth acceleration (``sawtooth > SAWTOOTH_RATIO``).
+    sawtooth : ndarray
+        Per case: rms(second difference of z̈) / rms(reference z̈).
+    prediction : StabilityPrediction or None
+    iterations : ndarray
+        Fixed-point iterations per step.
+    """
+
+    histories: list[xr.Dataset]
+    blew_up: np.ndarray
+    prediction: StabilityPrediction | None
+    iterations: np.ndarray
+    sawtooth: np.ndarray | None = None
+
+    def errors(self, references: Sequence[xr.Dataset], var: str = "z") -> np.ndarray:
+        """Normalised RMS error per case, ``rms(hybrid - ref) / rms(ref)`` of ``var``."""
+        out = []
+        for h, r in zip(self.histories, references):
+            hyb = np.asarray(h[var].values, float)
+            ref = np.asarray(r[var].sel(time=h["time"], method="nearest").values, float)
+            if not np.all(np.isfinite(hyb)):
+                out.append(np.inf)  # diverged
+                continue
+            out.append(float(np.sqrt(np.mean((hyb - ref) ** 2)) / max(np.sqrt(np.mean(ref ** 2)), 1e-300)))
+        return np.asarray(out)
+
+
+def _case_arrays(hs: list[xr.Dataset], spec, prescribed, known):
+    n_t = {h.sizes["time"] for h in hs}
+    if len(n_t) != 1:
+        raise InputError("all cases of a batched rollout need the same number of time samples")
+    nd = spec.n_dof
+    eta = (np.stack([np.asarray(h["eta"].values, float).reshape(h.sizes["time"], -1) for h in hs])
+           if "eta" in spec.inputs else np.zeros((len(hs), hs[0].sizes["time"], 0)))
+    if prescribed is None:
+        pre = np.zeros((len(hs), hs[0].sizes["time"], nd))
+    elif isinstance(prescribed, str):
+        if any(prescribed not in h for h in hs):
+            raise InputError(f"prescribed force '{prescribed}' missing from a case history")
+        pre = np.stack([np.asarray(h[prescribed].values, float) for h in hs])
+    else:
+        pre = np.asarray(prescribed, float).reshape(len(hs), hs[0].sizes["time"], nd)
+    for comp in known:
+        if isinstance(comp, PrescribedForce):
+            pre = pre + np.stack([comp.force(h) for h in hs])
+    return eta, pre
+
+
+def rollout(
+    net: ForceNetwork,
+    cases: xr.Dataset | Sequence[xr.Dataset],
+    *,
+    mass: float | np.ndarray,
+    known: Sequence[KnownComponent],
+    mode: str = "lagged",
+    scheme: str = "newmark",
+    prescribed: str | np.ndarray | None = None,
+    n_steps: int | None = None,
+    check: bool = True,
+    force: bool = False,
+    reference_for_check: xr.Dataset | Sequence[xr.Dataset] | None = None,
+    max_iter: int = 50,
+    tol: float = 1e-9,
+    progress: bool = False,
+) -> RolloutResult:
+    """Integrate the hybrid model for a batch of cases.
+
+    Each case history supplies the time grid (uniform, same length for all cases), the wave
+    elevation ``eta`` when the network uses it, the initial conditions (its first ``window``
+    samples fill the network's input window) and optionally a prescribed force.
+
+    Parameters
+    ----------
+    net : ForceNetwork
+        Fitted residual-force network.
+    cases : TimeHistory or list of TimeHistory
+        Case definitions / references.
+    mass : float or array
+        Rigid-body mass [kg].
+    known : sequence of KnownComponent
+        Known components in the ODE (hydrostatics, A∞, radiation memory ...).
+    mode : {"lagged", "implicit"}
+        Network sees the previous (loosely coupled) or the current step.
+    scheme : {"newmark", "semi_implicit_euler"}
+        Lagged-mode integrator (:func:`hybridwsi.diagnostic.integrators.lagged_step`).
+    prescribed : str or array, optional
+        A force [N] given as a function of time (e.g. ``"F_exc"``), read from the cases.
+    n_steps : int, optional
+        Steps to integrate (default: to the end of the case histories).
+    check, force : bool
+        Run :func:`check_stability` first; a predicted-unstable partition raises
+        :class:`UnstablePartitionError` unless ``force`` (then a RuntimeWarning).
+    reference_for_check : histories, optional
+        States for the linearisation (default: the cases).
+    max_iter, tol : int, float
+        Fixed-point settings per step.
+    progress : bool
+        tqdm progress bar over steps.
+    """
+    from tqdm.auto import tqdm
+
+    net._check_fitted()
+    hs = [cases] if isinstance(cases, xr.Dataset) else list(cases)
+    spec, nd, w, lead = net.spec_, net.n_dof_, net.spec_.span, net.spec_.lead
+    dt = time_step(hs[0])
+    eta, pre = _case_arrays(hs, spec, prescribed, known)
+    n_total = hs[0].sizes["time"]
+    n_max = n_total - w - lead
+    n_steps = n_max if n_steps is None else min(int(n_steps), n_max)
+    if n_steps < 1:
+        raise InputError(f"cases have {n_total} samples; the network window needs more than {w}")
+    prediction = None
+    if check:
+        prediction = check_stability(net, hs if reference_for_check is None else reference_for_check, mass=mass, known=known,
+                                     dt=dt, mode=mode, scheme=scheme)
+        if not prediction.stable:
+            msg = (f"hybrid {mode} rollout predicted unstable: spectral radius "
+                   f"{prediction.spectral_radius:.4f} > 1, |alpha_s|/(m+A_k) = "
+                   f"{prediction.added_mass_ratio:.3f}")
+            if not force:
+                raise UnstablePartitionError(msg + " (pass force=True / --force to run anyway)")
+            warnings.warn("UNSTABLE PARTITION: " + msg, RuntimeWarning, stacklevel=2)
+    phys = BatchedPhysics(mass, known, nd)
+    stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol)
+    # initial window from the case histories (lag 0 = sample span-1)
+    chans = np.stack([channel_array(h, spec) for h in hs])  # (nc, nt, nch)
+    k0 = w - 1
+    kin = {k: np.stack([np.asarray(h[k].values, float) for h in hs]) for k in ("z", "zdot", "zddot")}
+    x0 = np.zeros((len(hs), phys.n_states))
+    if phys.n_states:  # memory states consistent with the reference's past
+        x0 = _initial_states(phys, known, hs, k0)
+    s = _State(kin["z"][:, k0], kin["zdot"][:, k0], kin["zddot"][:, k0], x0,
+               chans[:, k0::-1][:, :w] if k0 > 0 else chans[:, :1])
+    t = np.asarray(hs[0]["time"].values, float)
+    nc = len(hs)
+    zs, vs, as_ = (np.empty((nc, n_steps + 1, nd)) for _ in range(3))
+    fnet, fknown = np.full((nc, n_steps + 1, nd), np.nan), np.full((nc, n_steps + 1, nd), np.nan)
+    zs[:, 0], vs[:, 0], as_[:, 0] = s.z, s.v, s.a
+    a_k = phys.m_eff - as_matrix(mass, nd, "mass")
+    f_phys = phys.force(t[k0], s.z, s.v, s.x)
+    fknown[:, 0], fnet[:, 0] = f_phys - s.a @ a_k.T, s.a @ phys.m_eff.T - f_phys - pre[:, k0]
+    ref_amp = np.maximum(np.max(np.abs(kin["z"]), axis=(1, 2)), 1e-12)
+    blew = np.zeros(nc, bool)
+    n_done = n_steps
+    xs = np.empty((nc, n_steps + 1, phys.n_states))
+    xs[:, 0] = s.x
+    for n in tqdm(range(n_steps), disable=not progress, desc=f"hybrid {mode}", unit="step"):
+        k1 = k0 + n + 1
+        s = stepper.step(s, t[k1], pre[:, k1], eta[:, k1 + lead])
+        zs[:, n + 1], vs[:, n + 1], as_[:, n + 1], xs[:, n + 1] = s.z, s.v, s.a, s.x
+        if n % 50 == 49 or n == n_steps - 1:  # cheap divergence watch
+            zmax = np.max(np.abs(zs[:, n - min(n, 49):n + 2]), axis=(1, 2))
+            blew |= ~np.isfinite(zmax) | (zmax > BLOWUP_FACTOR * ref_amp)
+            if blew.all():  # every case diverged: stop early, pad with NaN
+                n_done = n + 1
+                zs[:, n + 2:], vs[:, n + 2:], as_[:, n + 2:] = np.nan, np.nan, np.nan
+                xs[:, n + 2:] = np.nan
+                break
+    # forces on the trajectory (after the loop: one vectorised evaluation per time step row)
+    for n in range(1, n_steps + 1):
+        k1 = k0 + n
+        f_phys = phys.force(t[k1], zs[:, n], vs[:, n], xs[:, n])
+        fknown[:, n] = f_phys - as_[:, n] @ a_k.T
+        # the network force actually applied (lagged: the one evaluated on the step before)
+        fnet[:, n] = as_[:, n] @ phys.m_eff.T - f_phys - pre[:, k1]
+    a_ref = kin["zddot"][:, k0:k0 + n_steps + 1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        saw = np.sqrt(np.nanmean(np.diff(as_, 2, axis=1) ** 2, axis=(1, 2))) / np.maximum(
+            np.sqrt(np.mean(a_ref ** 2, axis=(1, 2))), 1e-300)
+    saw = np.where(np.isfinite(saw), saw, np.inf)
+    blew |= saw > SAWTOOTH_RATIO
+    out = []
+    tt = t[k0:k0 + n_steps + 1]
+    for i in range(nc):
+        forces = {"F_known": fknown[i], "F_net": fnet[i]}
+        out.append(make_history(tt, zs[i], vs[i], as_[i], forces=forces, dof=list(hs[i]["dof"].values),
+                                mass=mass, source=f"hybridwsi.surrogate.rollout ({mode})",
+                                inputs={"mode": mode, "dt": dt, "n_steps": n_done,
+                                        "known": [c.describe() for c in known],
+                                        "network": net.spec_.to_dict()},
+                                check=False))
+    return RolloutResult(out, blew, prediction, np.asarray(stepper.iterations), saw)
+
+
+def _initial_states(phys: BatchedPhysics, known, hs, k0: int) -> np.ndarray:
+    """Internal states at sample ``k0``: integrate the state ODE along the reference ż."""
+    x = np.zeros((len(hs), phys.n_states))
+    if k0 == 0:
+        return x
+    dt = time_step(hs[0])
+    z = np.stack([np.asarray(h["z"].values, float) for h in hs])
+    v = np.stack([np.asarray(h["zdot"].values, float) for h in hs])
+    t = np.asarray(hs[0]["time"].values, float)
+    for k in range(k0):  # Heun: only a short warm-up window
+        g0 = phys.state_derivative(t[k], z[:, k], v[:, k], x)
+        xp = x + dt * g0
+        x = x + 0.5 * dt * (g0 + phys.state_derivative(t[k + 1], z[:, k + 1], v[:, k + 1], xp))
+    return x

@@ -1,0 +1,112 @@
+"""PySPH wave tank (2D): physics checks against analytic references and experiments.
+
+All cases share one compiled 2D kernel set (same arrays and equations), so only the first
+test pays PySPH's ~1 min compile; later runs load it from ~/.pysph. Full-resolution checks
+are marked ``slow``.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+pysph = pytest.importorskip("pysph")
+
+from hybridwsi.sph import dam_break, tank
+from hybridwsi.sph.run import run_case
+
+pytestmark = pytest.mark.sph
+
+
+def _bottom_pressure_ratio(dp, tf=1.0):
+    case = tank.hydrostatic(dp=dp, depth=0.4, length=0.8, tf=tf, init="uniform", t_ramp=0.3)
+    hist = run_case(case, progress=False)
+    late = hist["time"] >= tf - 0.2
+    p = float(hist["p_fluid_bottom"].where(late, drop=True).mean())
+    return p / (case.rho0 * case.g * case.depth)
+
+
+def test_hydrostatic_tank_bottom_pressure_tiny():
+    # 10 particles over the depth, uniform start with gravity ramped over 0.3 s: after 1 s the
+    # bottom pressure must be rho g d (analytic); the error is first order in dp (4 % here)
+    assert _bottom_pressure_ratio(0.04) == pytest.approx(1.0, abs=0.06)
+
+
+@pytest.mark.slow
+def test_hydrostatic_tank_bottom_pressure_3_percent():
+    assert _bottom_pressure_ratio(0.01) == pytest.approx(1.0, abs=0.03)
+
+
+def _front_errors(dp, a=0.25):
+    case = tank.dam_break(dp=dp, a=a, tf=0.42)
+    hist = run_case(case, progress=False)
+    return dam_break.front_vs_experiment(hist, a, case.g)
+
+
+def test_dam_break_front_tiny():
+    # Martin & Moyce (1952), n^2 = 2: at 12 particles across the column the surge front must
+    # follow the measured Z(T) within 15 % once the gate-opening phase is over (T >= 1.5)
+    r = _front_errors(0.02)
+    late = r["T"] >= 1.5
+    assert late.sum() >= 3
+    assert np.all(r["rel_err"][late] < 0.15), r
+
+
+@pytest.mark.slow
+def test_dam_break_front_10_percent():
+    r = _front_errors(0.25 / 40)
+    late = r["T"] >= 1.5
+    assert np.all(r["rel_err"][late] < 0.10), r
+
+
+def test_fixed_circle_buoyancy():
+    # half-submerged circle held fixed: the summed particle force must equal Archimedes'
+    # rho g pi R^2 / 2 per unit length (mean over the last 0.2 s; acoustic waves oscillate)
+    case = tank.decay2d(dp=0.03, radius=0.15, depth=0.45, half_width=0.45, z0_over_d=0.0,
+                        tf=0.4, free=False)
+    hist = run_case(case, progress=False)
+    f = hist["F_fluid"].sel(dof="Heave").where(hist["time"] >= 0.2, drop=True).mean()
+    assert float(f) == pytest.approx(tank.RHO_WATER * case.g * math.pi * 0.15 ** 2 / 2, rel=0.06)
+
+
+def test_free_circle_released_above_equilibrium():
+    # released z0 = 0.1 D above equilibrium from still water: the first force evaluation is
+    # hydrostatic, F_fluid = rho g A_sub(z0) with the circular-segment area A_sub (analytic);
+    # then the circle falls, and m zddot = F_tot by construction of the output
+    R, z0 = 0.15, 0.03
+    case = tank.decay2d(dp=0.03, radius=R, depth=0.45, half_width=0.6, tf=0.35)
+    hist = run_case(case, progress=False)
+    a_sub = R * R * math.acos(z0 / R) - z0 * math.sqrt(R * R - z0 * z0)
+    f0 = float(hist["F_fluid"].values[0, 0])
+    assert f0 == pytest.approx(tank.RHO_WATER * case.g * a_sub, rel=0.06)
+    z = hist["z"].sel(dof="Heave")
+    assert float(z[0]) == pytest.approx(z0)
+    assert float(z.sel(time=0.3, method="nearest")) < 0.5 * z0
+    np.testing.assert_allclose(case.body_mass * hist["zddot"].values, hist["F_tot"].values,
+                               rtol=1e-12)
+
+
+def test_resume_gives_the_uninterrupted_result(tmp_path):
+    kw = {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "tf": 0.06}
+    ref = run_case(tank.decay2d(**kw), progress=False)
+    ck = tmp_path / "run.ckpt.npz"
+    part = run_case(tank.decay2d(**kw), checkpoint=ck, progress=False, stop_after_steps=80)
+    assert part.sizes["time"] < ref.sizes["time"]
+    res = run_case(tank.decay2d(**kw), tmp_path / "run.nc", checkpoint=ck, resume=True,
+                   progress=False)
+    for name in ("z", "zdot", "F_tot"):
+        np.testing.assert_array_equal(res[name].values, ref[name].values)
+    assert (tmp_path / "run.nc").is_file()
+
+
+def test_cli_runs_and_rejects_bad_dp(tmp_path, capsys):
+    from hybridwsi.cli import main
+    from hybridwsi.history import read_netcdf
+
+    out = tmp_path / "h.nc"
+    assert main(["sph", "hydrostatic", "--dp", "0.04", "--tf", "0.05", "--out", str(out),
+                 "--no-progress"]) == 0
+    ds = read_netcdf(out)
+    assert "p_bottom" in ds and "hybridwsi_version" in ds.attrs
+    assert main(["sph", "hydrostatic", "--dp", "-1"]) == 2
+    assert "error:" in capsys.readouterr().err

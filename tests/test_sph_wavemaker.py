@@ -1,0 +1,85 @@
+"""Pure-Python parts of the SPH tank: Biésel transfer function, dispersion, paddle motion,
+wave analysis, the Martin & Moyce table. No PySPH needed (except one cross-check)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridwsi.errors import InputError
+from hybridwsi.sph import wavemaker as wm
+from hybridwsi.sph.dam_break import MARTIN_MOYCE_N2_A225
+
+
+def _biesel_textbook(kd):
+    # Dean & Dalrymple (1991) Eq. 6.25, written as printed
+    return 2 * (np.cosh(2 * kd) - 1) / (np.sinh(2 * kd) + 2 * kd)
+
+
+@pytest.mark.parametrize("kd", [0.05, 0.3, 1.0, 2.5, 6.0])
+def test_biesel_matches_textbook_formula(kd):
+    assert wm.biesel_ratio(kd) == pytest.approx(_biesel_textbook(kd), rel=1e-12)
+
+
+def test_biesel_shallow_and_deep_limits():
+    # shallow water: H/S -> kd (piston displaces the whole column); deep water: H/S -> 2
+    for kd in (1e-4, 1e-3):
+        assert wm.biesel_ratio(kd) == pytest.approx(kd, rel=1e-5)
+    assert wm.biesel_ratio(20.0) == pytest.approx(2.0, rel=1e-12)
+
+
+def test_wavenumber_solves_dispersion_and_limits():
+    g = 9.81
+    for T, d in [(0.75, 0.9), (1.0, 0.4), (5.0, 0.1)]:
+        k = wm.wavenumber(T, d, g)
+        assert g * k * math.tanh(k * d) == pytest.approx((2 * math.pi / T) ** 2, rel=1e-10)
+    # deep water k = omega^2/g, shallow water k = omega / sqrt(g d)
+    assert wm.wavenumber(0.5, 50.0) == pytest.approx((2 * math.pi / 0.5) ** 2 / g, rel=1e-10)
+    w = 2 * math.pi / 60.0
+    assert wm.wavenumber(60.0, 1.0) == pytest.approx(w / math.sqrt(g * 1.0), rel=1e-3)
+
+
+def test_piston_stroke_gives_height():
+    T, d, H = 0.75, 0.9, 0.05
+    S = wm.piston_stroke(H, T, d)
+    k = wm.wavenumber(T, d)
+    assert S * _biesel_textbook(k * d) == pytest.approx(H, rel=1e-12)
+
+
+def test_piston_motion_derivatives_consistent():
+    S, T, tr = 0.04, 1.0, 2.0
+    eps = 1e-6
+    for t in (0.3, 1.1, 1.9, 2.5, 7.3):
+        x_m, v_m, _ = wm.piston_motion(t - eps, S, T, tr)
+        x_p, v_p, _ = wm.piston_motion(t + eps, S, T, tr)
+        _, v, a = wm.piston_motion(t, S, T, tr)
+        assert (x_p - x_m) / (2 * eps) == pytest.approx(v, rel=1e-6, abs=1e-9)
+        assert (v_p - v_m) / (2 * eps) == pytest.approx(a, rel=1e-5, abs=1e-7)
+    # after the ramp the amplitude is S/2
+    xs = [wm.piston_motion(t, S, T, tr)[0] for t in np.linspace(3, 4, 401)]
+    assert max(xs) == pytest.approx(S / 2, rel=1e-4)
+
+
+def test_zero_upcrossing_on_known_sine():
+    t = np.arange(0, 20, 0.01)
+    H, T, n = wm.zero_upcrossing(t, 0.02 * np.sin(2 * np.pi * t / 1.3) + 0.5, t_start=2.0)
+    assert T == pytest.approx(1.3, rel=1e-3)
+    assert H == pytest.approx(0.04, rel=1e-3)
+    assert n >= 10
+
+
+@pytest.mark.parametrize("bad", [{"period": -1, "depth": 1}, {"period": 1, "depth": 0},
+                                 {"period": float("nan"), "depth": 1}])
+def test_bad_input_raises_input_error(bad):
+    with pytest.raises(InputError):
+        wm.wavenumber(**bad)
+    with pytest.raises(InputError):
+        wm.zero_upcrossing(np.arange(10.0), np.ones(10))
+
+
+def test_martin_moyce_table_is_pysph_s():
+    pytest.importorskip("pysph")
+    from pysph.examples.db_exp_data import get_martin_moyce_2
+
+    t, z = get_martin_moyce_2()
+    np.testing.assert_array_equal(MARTIN_MOYCE_N2_A225, np.c_[t, z])

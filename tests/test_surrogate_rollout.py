@@ -1,0 +1,157 @@
+"""Hybrid rollout: analytic references, stability prediction vs observation per partition."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+import synthetic_hydro as sh
+
+from hybridwsi.diagnostic import stability
+from hybridwsi.diagnostic.components import Hydrostatic
+from hybridwsi.history import make_history
+from hybridwsi.surrogate.demo import (
+    drift,
+    evaluate_partition,
+    make_histories,
+    partitions,
+)
+from hybridwsi.surrogate.network import ForceNetwork
+from hybridwsi.surrogate.rollout import (
+    UnstablePartitionError,
+    check_stability,
+    rollout,
+)
+
+torch.set_num_threads(1)
+M, C = 7.06, 692.2
+
+
+def _linear_net(alpha: float, beta: float, gamma: float, hist) -> ForceNetwork:
+    """A network that is exactly F = alpha zdd + beta zd + gamma z (single linear layer)."""
+    net = ForceNetwork(hidden=(), max_epochs=1, inputs=("z", "zdot", "zddot"))
+    net.fit(hist, lambda h: np.zeros((h.sizes["time"], 1)) + 1.0 * h["z"].values)
+    with torch.no_grad():
+        w = torch.tensor([gamma, beta, alpha], dtype=torch.float64)
+        net._ys[:] = 1.0
+        net._ym[:] = 0.0
+        net.model_[0].weight[:] = (w * net._xs)[None, :]
+        net.model_[0].bias[:] = (w * net._xm).sum()
+    return net
+
+
+def _decay_case(z0: float, dt: float, duration: float):
+    t = np.arange(0.0, duration + dt / 2, dt)
+    z = np.zeros_like(t)
+    z[0] = z0
+    h = make_history(t, z, np.zeros_like(t), np.zeros_like(t), mass=M)
+    h["zddot"][0, 0] = -C * z0 / M  # consistent initial acceleration
+    return h
+
+
+def test_rollout_with_exact_damping_network_matches_analytic_decay():
+    """Network = -B zdot (exact), hydrostatics known: free decay of m z'' + B z' + C z = 0."""
+    b, z0, dt = 4.0, 0.01, 0.002
+    case = _decay_case(z0, dt, 3.0)
+    net = _linear_net(0.0, -b, 0.0, case)
+    res = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="lagged")
+    t = res.histories[0]["time"].values
+    wn, zeta = np.sqrt(C / M), b / (2 * np.sqrt(C * M))
+    wd = wn * np.sqrt(1 - zeta**2)
+    exact = z0 * np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))
+    np.testing.assert_allclose(res.histories[0]["z"].values[:, 0], exact, atol=0.01 * z0)
+    assert res.prediction.stable and not res.blew_up[0]
+    implicit = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="implicit")
+    np.testing.assert_allclose(implicit.histories[0]["z"].values[:, 0], exact, atol=0.005 * z0)
+
+
+@pytest.mark.parametrize("alpha, beta, gamma", [(0.0, -3.0, 0.0), (-3.5, 0.5, 20.0), (6.0, -1.0, 0.0)])
+def test_predicted_map_matches_stability_module(alpha, beta, gamma):
+    """Window-1 linear network: our one-step map is the stability module's amplification map."""
+    dt = 0.01
+    case = _decay_case(0.01, dt, 0.2)
+    net = _linear_net(alpha, beta, gamma, case)
+    pred = check_stability(net, case, mass=M, known=[Hydrostatic(C)], dt=dt, mode="lagged")
+    ref = stability.loosely_coupled_stability(M, 0.0, 0.0, C, alpha, beta, gamma, dt, "newmark")
+    assert pred.spectral_radius == pytest.approx(ref.spectral_radius, rel=1e-9)
+    assert pred.added_mass_ratio == pytest.approx(abs(alpha) / M, rel=1e-9)
+
+
+def test_added_mass_ratio_above_one_is_refused_and_blows_up():
+    """alpha_s = -1.5 m in lagged mode: refused by default; forced, it diverges."""
+    dt = 0.01
+    case = _decay_case(0.01, dt, 2.0)
+    net = _linear_net(-1.5 * M, 0.0, 0.0, case)
+    with pytest.raises(UnstablePartitionError, match="alpha_s"):
+        rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="lagged")
+    with pytest.warns(RuntimeWarning, match="UNSTABLE"):
+        res = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="lagged", force=True)
+    assert res.blew_up[0]
+
+
+@pytest.fixture(scope="module")
+def light_body_data():
+    """Synthetic hydrodynamics (A∞ = 3.5 kg) on a light body m = 2.1 kg < A∞."""
+    co = sh.coefficients()
+    m = 0.3 * sh.M
+    train = make_histories(co, m, range(2), hs=0.05, tp=0.8, duration=30.0, dt=0.02)
+    test = make_histories(co, m, [1000], hs=0.05, tp=0.8, duration=30.0, dt=0.02)
+    return co, m, train, test
+
+
+NET_KW = {"hidden": (32,), "window": 11, "stride": 5, "max_epochs": 200, "lr": 3e-3,
+          "patience": 25, "batch_size": 128, "seed": 0}
+
+
+def test_partitions_predicted_vs_observed_light_body(light_body_data):
+    co, m, train, test = light_body_data
+    long_case = make_histories(co, m, [2000], hs=0.05, tp=0.8, duration=1000 * 0.8, dt=0.02)[0]
+    rows = {name: evaluate_partition(name, part, train, test, m, net_kw=NET_KW,
+                                     long_case=long_case if name == "recommended" else None)
+            for name, part in partitions(co).items()}
+    a_inf = rows["added_mass_to_network"]
+    # the network learnt (most of) the added mass: alpha_s ≈ -A∞ = -3.5 kg, and |alpha_s| > m
+    assert -4.5 < a_inf["alpha_s"] < -2.2
+    assert a_inf["added_mass_ratio"] >= 1.0
+    assert not a_inf["predicted_stable"] and not a_inf["observed_stable"]
+    rec = rows["recommended"]
+    assert rec["alpha_s"] == 0.0 and rec["predicted_stable"] and rec["observed_stable"]
+    assert rec["r2_held_out"] > 0.99
+    assert max(rec["held_out_rms_error_z"]) < 0.35  # held-out seas, vs the Cummins reference
+    # 1000 peak periods of the recommended partition: no blow-up, no drift
+    assert not rec["long_run"]["blew_up"] and rec["long_run"]["drift"] < 0.01
+    assert rec["long_run"]["rms_error_z"] < 0.35
+    assert all(r["agree"] for r in rows.values())
+
+
+def test_sphere_added_mass_partition_is_stable_as_predicted():
+    """The paper's sphere has A∞/m ≈ 0.5: leaving A∞ to the network is lagged-stable."""
+    co = sh.coefficients()
+    train = make_histories(co, sh.M, range(2), hs=0.05, tp=0.8, duration=30.0, dt=0.02)
+    test = make_histories(co, sh.M, [1000], hs=0.05, tp=0.8, duration=30.0, dt=0.02)
+    part = partitions(co)["added_mass_to_network"]
+    row = evaluate_partition("added_mass_to_network", part, train, test, sh.M, net_kw=NET_KW)
+    assert row["added_mass_ratio"] < 1.0
+    assert row["predicted_stable"] and row["observed_stable"]
+
+
+def test_drift_metric():
+    t = np.arange(0, 100, 0.01)
+    ref = make_history(t, np.sin(2 * np.pi * t), mass=M)
+    bad = make_history(t, np.sin(2 * np.pi * t) + 0.05 * t / 100, mass=M)
+    assert drift(ref, ref) < 1e-3
+    assert drift(bad, ref) == pytest.approx(0.0475 / np.sqrt(0.5), rel=0.05)
+
+
+def test_batched_rollout_equals_single_case_rollouts():
+    """Cases in one torch batch evolve independently (same as one at a time)."""
+    dt = 0.005
+    c1, c2 = _decay_case(0.01, dt, 0.5), _decay_case(-0.02, dt, 0.5)
+    net = _linear_net(-1.0, -3.0, 10.0, c1)
+    both = rollout(net, [c1, c2], mass=M, known=[Hydrostatic(C)], mode="implicit")
+    for i, c in enumerate((c1, c2)):
+        one = rollout(net, [c], mass=M, known=[Hydrostatic(C)], mode="implicit")
+        np.testing.assert_allclose(both.histories[i]["z"].values, one.histories[0]["z"].values,
+                                   rtol=1e-7, atol=1e-12)
