@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 import scipy.signal
 import xarray as xr
 from tqdm.auto import tqdm
@@ -93,9 +94,36 @@ class CumminsSystem:
         return a, b
 
 
+def _dof_values(coeffs: xr.Dataset, name: str, dofs: list[str]) -> np.ndarray | None:
+    """``coeffs[name]`` at ``dofs`` on both DOF axes, axes in stored order, by positional
+    indexing (xarray's label ``sel`` costs more than a whole short state-space run); None when
+    the fast path does not apply (unusual layout: the caller falls back to ``sel``)."""
+    var = coeffs.variables[name]
+    vals = var.values
+    for dim in ("radiating_dof", "influenced_dof"):
+        index = coeffs.indexes.get(dim)
+        if dim not in var.dims or index is None or not index.is_unique:
+            return None
+        pos = index.get_indexer(dofs)
+        if np.any(pos < 0):
+            raise InputError(f"'{name}' has no entries for DOFs {dofs}")
+        vals = vals.take(pos, axis=var.dims.index(dim))
+    return vals
+
+
 def _matrix(coeffs: xr.Dataset, name: str, dofs: list[str]) -> np.ndarray:
     if name not in coeffs:
         raise InputError(f"coefficients have no '{name}'")
+    dims = coeffs.variables[name].dims
+    vals = _dof_values(coeffs, name, dofs) if set(dims) == {"radiating_dof", "influenced_dof"} \
+        else None
+    if vals is not None:
+        arr = np.asarray(vals, dtype=float)
+        if dims[0] == "radiating_dof":
+            arr = arr.T  # stored [radiating, influenced] -> [influenced i, radiating j]
+        if not np.all(np.isfinite(arr)):
+            raise InputError(f"coefficient '{name}' contains NaN/inf")
+        return arr
     da = coeffs[name]
     try:
         da = da.sel(radiating_dof=dofs, influenced_dof=dofs)
@@ -123,6 +151,9 @@ def _check_coeffs(coeffs: xr.Dataset, dofs: list[str], radiation: str) -> None:
 def _matrix_omega(coeffs: xr.Dataset, name: str, dofs: list[str]) -> np.ndarray:
     if name not in coeffs:
         raise InputError(f"coefficients have no '{name}'")
+    vals = _dof_values(coeffs, name, dofs)
+    if vals is not None:
+        return vals
     return np.asarray(coeffs[name].sel(radiating_dof=dofs, influenced_dof=dofs).values)
 
 
@@ -280,25 +311,40 @@ def _solve_linear(a: np.ndarray, b: np.ndarray, dt: float, u: np.ndarray, y0: np
     if np.linalg.cond(vec) > _MODAL_COND:
         return _solve_stepping(phi, g0, g1, u, y0, out)
     vinv = np.linalg.inv(vec)
-    w0, w1, q0, ov = vinv @ g0, vinv @ g1, vinv @ y0, out @ vec
-    res = np.zeros((nt, out.shape[0], n_case))
     # Φ is real: a complex pair's modes are conjugate, so solve one and count it twice
     tol = 1e-12 * max(1.0, float(np.max(np.abs(lam))))
+    keep = lam.imag >= -tol
+    lam = lam[keep]
+    weight = np.where(lam.imag > tol, 2.0, 1.0)
+    w0, w1, q0 = vinv[keep] @ g0, vinv[keep] @ g1, vinv[keep] @ y0
+    cw = (out @ vec)[:, keep] * weight  # (n_out, n_mode): output weights of the kept modes
+    # modal recursions, time last (contiguous for lfilter); u is real, so the drives' real
+    # and imaginary parts are real products (broadcast: n_in is tiny, a k = 1 matmul is slower)
+    # q_m[k] = λ_m q_m[k-1] + (W0 u_{k-1} + W1 u_k)_m, with q_m[0] = q0_m
+    ut = u.transpose(2, 1, 0)  # (n_case, n_in, nt)
+    n_mode = lam.size
+    src = np.empty((n_case, nt), complex)  # reused for every mode
+    qs = np.empty((n_case, 2 * n_mode, nt))  # Re q_m in rows m, Im q_m in rows n_mode + m
     for m, lm in enumerate(lam):
-        if lm.imag < -tol:
+        src[:, 0] = q0[m]
+        for part, w0m, w1m in ((src.real, w0[m].real, w1[m].real),
+                               (src.imag, w0[m].imag, w1[m].imag)):
+            np.multiply(w1m[0], ut[:, 0, 1:], out=part[:, 1:])
+            part[:, 1:] += w0m[0] * ut[:, 0, :-1]
+            for i in range(1, ut.shape[1]):
+                part[:, 1:] += w1m[i] * ut[:, i, 1:]
+                part[:, 1:] += w0m[i] * ut[:, i, :-1]
+        if lm.imag == 0 and not np.any(cw[:, m].imag):
+            # a real mode whose Im q is never used: the real filter gives bit-identical
+            # Re q (the complex one only adds exact zero products) at about half the cost
+            qs[:, m] = scipy.signal.lfilter([1.0], [1.0, -lm.real], src.real, axis=-1)
+            qs[:, n_mode + m] = 0.0
             continue
-        weight = 2.0 if lm.imag > tol else 1.0
-        # q_m[k] = λ q_m[k-1] + (W0 u_{k-1} + W1 u_k)_m, with q_m[0] = q0_m
-        drive = np.tensordot(u, w1[m], axes=([1], [0]))  # (nt, n_case): W1 u_k
-        src = np.empty((nt, n_case), complex)
-        src[0] = q0[m]
-        src[1:] = drive[1:]
-        src[1:] += np.tensordot(u[:-1], w0[m], axes=([1], [0]))
-        q = scipy.signal.lfilter([1.0], [1.0, -lm], src, axis=0)
-        for j in range(out.shape[0]):  # real part of ov[j, m] q, without complex temporaries
-            if ov[j, m] != 0:
-                res[:, j] += weight * (ov[j, m].real * q.real - ov[j, m].imag * q.imag)
-    return res
+        q = scipy.signal.lfilter([1.0], [1.0, -lm], src, axis=-1)
+        qs[:, m], qs[:, n_mode + m] = q.real, q.imag
+    # real part of Σ_m cw[j, m] q_m = Σ_m (Re cw Re q_m − Im cw Im q_m): one real product
+    res = np.concatenate([cw.real, -cw.imag], axis=1) @ qs  # (n_case, n_out, nt)
+    return res.transpose(2, 1, 0)  # (n_case, n_out, nt) -> (nt, n_out, n_case)
 
 
 def _solve_stepping(phi, g0, g1, u, y0, out) -> np.ndarray:
@@ -619,18 +665,36 @@ def _inputs(coeffs: xr.Dataset, sys: CumminsSystem, **kw: Any) -> dict[str, Any]
 def _forces(sys: CumminsSystem, z, v, f_hs, mem, f_exc, f_ext) -> dict[str, np.ndarray]:
     """Force components and the acceleration from the equation of motion (last axis = DOF)."""
     meff = sys.mass + sys.added_mass_inf
-    acc = np.linalg.solve(meff, np.moveaxis(f_hs + mem + f_exc + f_ext, -1, 0).reshape(sys.n, -1))
+    rhs = f_hs + mem  # in-place sums below: same order (same rounding), fewer temporaries
+    rhs += f_exc
+    rhs += f_ext
+    rhs = np.moveaxis(rhs, -1, 0).reshape(sys.n, -1)
+    if sys.n == 1:  # a scalar mass: the solve is a division (LAPACK's getrs is slow here)
+        acc = rhs / meff[0, 0]
+    else:  # LAPACK getrf/getrs as np.linalg.solve, without its copies of the right-hand side
+        acc = scipy.linalg.lu_solve(scipy.linalg.lu_factor(meff), rhs, check_finite=False,
+                                    overwrite_b=True)
     acc = np.moveaxis(acc.reshape(sys.n, *z.shape[:-1]), 0, -1)
-    f_inf = -acc @ sys.added_mass_inf.T
+    f_inf = acc @ sys.added_mass_inf.T
+    np.negative(f_inf, out=f_inf)
+    tot = f_hs + f_inf
+    tot += mem
+    tot += f_exc
+    tot += f_ext
     return {"zddot": acc, "F_hs": f_hs, "F_rad_inf": f_inf, "F_rad_mem": mem, "F_exc": f_exc,
-            "F_ext": f_ext, "F_tot": f_hs + f_inf + mem + f_exc + f_ext}
+            "F_ext": f_ext, "F_tot": tot}
 
 
 def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, wave, inputs) -> xr.Dataset:
+    # validated here rather than by make_history: the time grid is ours (uniform) and the
+    # forcing was checked on input, so only the solution itself can be non-finite
+    if not all(np.all(np.isfinite(a)) for a in (z, v, mem)):
+        raise SolverError("the Cummins solution is not finite (unstable system); check the "
+                          "coefficients and the state-space fit")
     f = _forces(sys, z, v, f_hs, mem, f_exc, f_ext)
     acc = f.pop("zddot")
     hist = make_history(t, z, v, acc, forces={k: f[k] for k in FORCES}, dof=sys.dofs,
-                        mass=sys.mass, source="cummins", inputs=inputs)
+                        mass=sys.mass, source="cummins", inputs=inputs, check=False)
     if sys.ss is not None:
         hist.attrs["radiation_ss"] = json.dumps(sys.ss.to_dict())
     if wave is not None:

@@ -125,23 +125,25 @@ def make_history(
         if m.shape != (nd, nd):
             raise InputError(f"mass must be a scalar or a ({nd}, {nd}) matrix, got {m.shape}")
         data_vars["mass"] = (("dof", "dof_j"), m, {"units": "kg"})
+    coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "dof": dof}
+    if "mass" in data_vars:
+        coords["dof_j"] = dof  # at construction: a later assign_coords costs a second merge
     ds = xr.Dataset(
         data_vars,
-        coords={"time": ("time", t, {"units": "s"}), "dof": dof},
+        coords=coords,
         attrs={
             "hybridwsi_version": _version(),
             "source": source,
             "inputs": json.dumps(dict(inputs or {}), default=str, sort_keys=True),
         },
     )
-    if "mass" in ds:
-        ds = ds.assign_coords(dof_j=dof)
     return validate(ds) if check else ds
 
 
 def force_names(ds: xr.Dataset) -> list[str]:
     """Names of the force-component variables of a TimeHistory."""
-    return [k for k, v in ds.data_vars.items() if v.attrs.get("role") == "force"]
+    # ds.variables: no DataArray per variable (validation runs on every simulated history)
+    return [k for k in ds.data_vars if ds.variables[k].attrs.get("role") == "force"]
 
 
 def mass_matrix(ds: xr.Dataset) -> np.ndarray | None:
@@ -197,7 +199,7 @@ def validate(
     for name in [*KINEMATICS, *force_names(ds)]:
         if name not in ds:
             continue
-        var = ds[name]
+        var = ds.variables[name]
         if var.dims != ("time", "dof"):
             raise InputError(f"'{name}' has dims {var.dims}; expected ('time', 'dof')")
         bad = ~np.isfinite(var.values)

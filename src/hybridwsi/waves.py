@@ -299,7 +299,10 @@ def ramp_factor(t: np.ndarray, ramp: float) -> np.ndarray:
         raise InputError(f"ramp must be a finite duration >= 0 [s], got {ramp}")
     if ramp == 0:
         return np.ones_like(t)
-    return np.where(t < ramp, 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, ramp) / ramp)), 1.0)
+    out = np.ones_like(t)
+    on = t < ramp  # the cosine only where the ramp acts (long runs: a few % of the samples)
+    out[on] = 0.5 * (1 - np.cos(np.pi * np.clip(t[on], 0, ramp) / ramp))
+    return out
 
 
 def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float) -> xr.DataArray:

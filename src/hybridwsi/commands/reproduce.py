@@ -17,11 +17,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="results", help="results folder (default: results)")
     p.add_argument("--quick", action="store_true", help="coarse BEM mesh, for tests and a first look")
     p.add_argument("--no-decay", action="store_true", help="skip the decay validation (Fig. 1)")
+    p.add_argument("--no-hybrid", action="store_true",
+                   help="skip the outlook (component selection and hybrid-solver demo)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
 
 
 def run(args: argparse.Namespace) -> int:
     from hybridwsi.reproduce import run as reproduce
 
-    reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay)
+    reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay,
+              hybrid=not args.no_hybrid)
     return 0

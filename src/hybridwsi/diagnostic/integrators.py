@@ -38,6 +38,10 @@ Carried state ``[z_n, ż_n, a_n]``::
     z_{n+1} = z_n + Δt ż_n + Δt² ((½−β_N) a_n + β_N a_{n+1})
     returns (z_{n+1}, ż_{n+1}, a_{n+1})
 
+:class:`LaggedIntegrator` is the same step with the scheme, Δt and matrices fixed (the implicit
+solve factorised once); :func:`lagged_step` is implemented with it, so a rollout stepping a
+``LaggedIntegrator`` runs exactly the map whose amplification matrix is analysed.
+
 A surrogate linearised as ``F_x ≈ α_s z̈ + β_s ż + γ_s z`` gives ``a ← (α_s/M) a + …`` from one
 step to the next: for ``|α_s|/M ≥ 1`` the lagged coupling is unstable at every Δt (the
 added-mass instability of partitioned fluid–structure solvers).
@@ -63,6 +67,62 @@ def check_scheme(scheme: str) -> str:
     if scheme not in SCHEMES:
         raise InputError(f"unknown scheme '{scheme}' (choose from {', '.join(SCHEMES)})")
     return scheme
+
+
+class LaggedIntegrator:
+    """:func:`lagged_step` with the scheme, ``dt`` and the matrices fixed: the solve of the
+    implicit linear part is factorised once (``M⁻¹`` or ``(M + γ_N Δt B + β_N Δt² C)⁻¹``) and
+    the step coefficients precomputed, so a long rollout pays only a few small products per
+    step. :func:`lagged_step` is this class applied once, so both run the same arithmetic.
+
+    Parameters
+    ----------
+    scheme : {"semi_implicit_euler", "newmark"}
+    dt : float
+        Step [s].
+    mass, damping, stiffness : ndarray, shape (n, n)
+        ``M = m + A_k`` [kg], ``B_k`` [N s/m], ``C_k`` [N/m].
+    """
+
+    def __init__(self, scheme: str, dt: float, mass: np.ndarray, damping: np.ndarray,
+                 stiffness: np.ndarray) -> None:
+        self.scheme, self.dt = check_scheme(scheme), dt
+        self.damping, self.stiffness = damping, stiffness
+        # zero matrices contribute exactly nothing: skip their products
+        self._use_b, self._use_c = bool(np.any(damping)), bool(np.any(stiffness))
+        if scheme == "newmark":
+            bn, gn = NEWMARK_BETA, NEWMARK_GAMMA
+            lhs = mass + gn * dt * damping + bn * dt**2 * stiffness
+            self._c_v, self._c_z = (1.0 - gn) * dt, (0.5 - bn) * dt**2
+            self._c_z1, self._c_v1 = bn * dt**2, gn * dt
+        else:
+            lhs = mass
+        self._lhs_inv = np.linalg.inv(lhs)
+
+    def step(self, z: np.ndarray, zdot: np.ndarray, zddot: np.ndarray, f: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """New carried state from the carried state and the explicit force ``f`` [N].
+
+        Arrays have shape (n,) or (n, n_cases) (columns are independent cases).
+        """
+        if self.scheme == "semi_implicit_euler":
+            r = f
+            if self._use_b:
+                r = r - self.damping @ zdot
+            if self._use_c:
+                r = r - self.stiffness @ z
+            acc = self._lhs_inv @ r
+            v1 = zdot + self.dt * acc
+            return z + self.dt * v1, v1, acc
+        v_pred = zdot + self._c_v * zddot
+        z_pred = z + self.dt * zdot + self._c_z * zddot
+        r = f
+        if self._use_b:
+            r = r - self.damping @ v_pred
+        if self._use_c:
+            r = r - self.stiffness @ z_pred
+        acc = self._lhs_inv @ r
+        return z_pred + self._c_z1 * acc, v_pred + self._c_v1 * acc, acc
 
 
 def lagged_step(
@@ -99,18 +159,12 @@ def lagged_step(
     -------
     z, zdot, zddot : ndarray, shape (n,)
         The new carried state.
+
+    Notes
+    -----
+    Equivalent to ``LaggedIntegrator(scheme, dt, mass, damping, stiffness).step(z, zdot,
+    zddot, explicit_force(t, z, zdot, zddot))``; long runs should build the integrator once.
     """
-    f = np.asarray(explicit_force(t, z, zdot, zddot), dtype=float)
-    if scheme == "semi_implicit_euler":
-        acc = np.linalg.solve(mass, f - damping @ zdot - stiffness @ z)
-        v1 = zdot + dt * acc
-        return z + dt * v1, v1, acc
-    if scheme == "newmark":
-        bn, gn = NEWMARK_BETA, NEWMARK_GAMMA
-        v_pred = zdot + (1.0 - gn) * dt * zddot
-        z_pred = z + dt * zdot + (0.5 - bn) * dt**2 * zddot
-        lhs = mass + gn * dt * damping + bn * dt**2 * stiffness
-        acc = np.linalg.solve(lhs, f - damping @ v_pred - stiffness @ z_pred)
-        return z_pred + bn * dt**2 * acc, v_pred + gn * dt * acc, acc
     check_scheme(scheme)
-    raise AssertionError("unreachable")
+    f = np.asarray(explicit_force(t, z, zdot, zddot), dtype=float)
+    return LaggedIntegrator(scheme, dt, mass, damping, stiffness).step(z, zdot, zddot, f)

@@ -42,7 +42,7 @@ from hybridwsi.diagnostic.components import (
     as_matrix,
     summed_linear_coefficients,
 )
-from hybridwsi.diagnostic.integrators import check_scheme, lagged_step
+from hybridwsi.diagnostic.integrators import LaggedIntegrator, check_scheme
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import make_history, time_step
 from hybridwsi.surrogate.features import channel_array
@@ -50,6 +50,8 @@ from hybridwsi.surrogate.linearise import feature_jacobian, linearise
 from hybridwsi.surrogate.network import ForceNetwork, torch
 
 MODES = ("lagged", "implicit")
+#: network evaluations of at most this many cases run in NumPy (per-call torch overhead)
+_NUMPY_MAX_BATCH = 8
 #: |z| beyond this many times the reference amplitude (or non-finite) counts as blown up
 BLOWUP_FACTOR = 20.0
 #: rms of the second difference of z̈ above this fraction of the reference rms z̈ is the
@@ -131,6 +133,7 @@ class BatchedPhysics:
                 self.other.append((slice(n, n + comp.n_states), comp))
                 n += comp.n_states
         self.n_states = n
+        self._quad = bool(np.any(self.quad))
         self.other_states = any(comp.n_states for _, comp in self.other)
         self._trap: dict[float, list] = {}
 
@@ -144,18 +147,35 @@ class BatchedPhysics:
             self._trap[dt] = blocks
         return self._trap[dt]
 
-    def force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """Known force without its acceleration part [N], (n_cases, n_dof)."""
-        f = -v @ self.b_lin.T - z @ self.c_lin.T - self.quad * np.abs(v) * v
+    @property
+    def has_remainder(self) -> bool:
+        """Whether any known force is not linear ``-B_k v - C_k z`` (quadratic damping,
+        memory states, other components)."""
+        return bool(self._quad or self.ss or self.other)
+
+    def _add_remainder(self, f: np.ndarray, t: float, z: np.ndarray, v: np.ndarray,
+                       x: np.ndarray) -> np.ndarray:
+        """``f`` plus the known forces beyond the linear part [N], (n_cases, n_dof)."""
+        if self._quad:  # an all-zero coefficient adds exactly nothing
+            f = f - self.quad * np.abs(v) * v
         for sl, _, _, c in self.ss:
             f -= x[:, sl] @ c.T
         for sl, comp in self.other:
             f += np.stack([comp.ode_force(t, z[i], v[i], x[i, sl]) for i in range(len(z))])
         return f
 
+    def force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Known force without its acceleration part [N], (n_cases, n_dof).
+
+        Row-wise: with no ``other`` components (``t`` unused) the rows may stack any batch of
+        states, e.g. all time steps of a trajectory at once.
+        """
+        return self._add_remainder(-v @ self.b_lin.T - z @ self.c_lin.T, t, z, v, x)
+
     def explicit_force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """The known force minus its linear ``-B_k v - C_k z`` part [N] (treated explicitly)."""
-        return self.force(t, z, v, x) + v @ self.b_lin.T + z @ self.c_lin.T
+        """The known force minus its linear ``-B_k v - C_k z`` part [N] (treated explicitly),
+        computed directly (zero when :attr:`has_remainder` is False)."""
+        return self._add_remainder(np.zeros(np.shape(z)), t, z, v, x)
 
     def state_derivative(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
         dx = np.zeros_like(x)
@@ -197,11 +217,20 @@ class _State:
 ForceFn = Callable[[np.ndarray], np.ndarray]  # features (nc, n_feat) -> force (nc, nd)
 
 
+def _index(positions) -> slice | list[int]:
+    """Channel positions as a slice when consecutive (basic indexing: no fancy-index copy)."""
+    pos = list(positions)
+    if pos and pos == list(range(pos[0], pos[0] + len(pos))):
+        return slice(pos[0], pos[0] + len(pos))
+    return pos
+
+
 class _Stepper:
     """One step of the hybrid ODE, shared by the rollout and its stability map.
 
-    ``lagged`` calls :func:`hybridwsi.diagnostic.integrators.lagged_step` (the integrator
-    whose amplification matrix :mod:`hybridwsi.diagnostic.stability` analyses) with the
+    ``lagged`` steps a :class:`hybridwsi.diagnostic.integrators.LaggedIntegrator` (the
+    arithmetic of ``lagged_step``, whose amplification matrix
+    :mod:`hybridwsi.diagnostic.stability` analyses) with the
     network, the radiation-memory force and nonlinear known terms as the explicit force on the
     start-of-step state; the linear known part (M = m + A_k, B_k, C_k) is implicit.
     ``implicit`` uses Newmark average acceleration with the network in the fixed point.
@@ -215,11 +244,16 @@ class _Stepper:
         self.phys, self.spec, self.dt, self.mode = phys, spec, float(dt), mode
         self.scheme = check_scheme(scheme)
         self.net_force, self.max_iter, self.tol = net_force, int(max_iter), float(tol)
-        self.kin_idx = {name: [spec.channels.index((name, k)) for k in range(spec.n_dof)]
+        self.kin_idx = {name: _index(spec.channels.index((name, k)) for k in range(spec.n_dof))
                         for name in ("z", "zdot", "zddot") if name in spec.inputs}
-        self.eta_idx = [spec.channels.index(("eta", k)) for k in range(spec.n_probe)] \
+        self.eta_idx = _index(spec.channels.index(("eta", k)) for k in range(spec.n_probe)) \
             if "eta" in spec.inputs else []
         self.iterations: list[int] = []
+        # lagged mode: the implicit solve of lagged_step factorised once for the whole run
+        self.integrator = LaggedIntegrator(self.scheme, self.dt, phys.m_eff, phys.b_lin,
+                                           phys.c_lin) if mode == "lagged" else None
+        self._remainder = phys.has_remainder
+        self._has_eta = "eta" in spec.inputs and spec.n_probe > 0
 
     def row(self, z, v, a, eta) -> np.ndarray:
         """Feature channels of one time step, (nc, n_channels)."""
@@ -227,7 +261,7 @@ class _Stepper:
         for name, val in (("z", z), ("zdot", v), ("zddot", a)):
             if name in self.kin_idx:
                 out[:, self.kin_idx[name]] = val
-        if self.eta_idx:
+        if self._has_eta:
             out[:, self.eta_idx] = eta
         return out
 
@@ -265,9 +299,10 @@ class _Stepper:
         f_net = self.net_force(self.feat(s.buf))
         # explicit part on the start-of-step state; the prescribed force is a known function
         # of time, so it is taken at the end of the step (no coupling lag to analyse)
-        f_x = f_net + f_pre + phys.explicit_force(t0, s.z, s.v, s.x)
-        z1, v1, a1 = lagged_step(self.scheme, t0, self.dt, s.z.T, s.v.T, s.a.T, phys.m_eff,
-                                 phys.b_lin, phys.c_lin, lambda *_: f_x.T)
+        f_x = f_net + f_pre
+        if self._remainder:  # otherwise exactly zero
+            f_x = f_x + phys.explicit_force(t0, s.z, s.v, s.x)
+        z1, v1, a1 = self.integrator.step(s.z.T, s.v.T, s.a.T, f_x.T)
         z1, v1, a1 = z1.T, v1.T, a1.T
         g0 = phys.state_derivative(t0, s.z, s.v, s.x) if phys.n_states else None
         x1 = self._states(s, t0, v1, z1, g0)
@@ -323,8 +358,20 @@ def _torch_force(net: ForceNetwork) -> ForceFn:
         wts = [w.T.contiguous() for w in ws]
     act = type(acts[0]) if acts else None
     fn = {torch.nn.Tanh: torch.tanh, torch.nn.ReLU: torch.relu}.get(act)
+    # the same folded layers as NumPy arrays: for a few cases per call a torch call's fixed
+    # overhead (tensor wrapping, dispatch, inference-mode context) exceeds the arithmetic
+    np_fn = {torch.nn.Tanh: np.tanh, torch.nn.ReLU: lambda h: np.maximum(h, 0.0)}.get(act)
+    use_np = np_fn is not None and all(w.device.type == "cpu" for w in wts)
+    if use_np:
+        np_wts = [w.numpy() for w in wts]
+        np_bs = [b.numpy() for b in bs]
 
     def f(x: np.ndarray) -> np.ndarray:
+        if use_np and len(x) <= _NUMPY_MAX_BATCH:
+            h = x @ np_wts[0] + np_bs[0]
+            for w, b in zip(np_wts[1:], np_bs[1:]):
+                h = np_fn(h) @ w + b
+            return h
         with torch.inference_mode():
             h = torch.from_numpy(np.ascontiguousarray(x))
             for k, (w, b) in enumerate(zip(wts, bs)):
@@ -657,12 +704,18 @@ def rollout(
                 zs[:, n + 2:], vs[:, n + 2:], as_[:, n + 2:] = np.nan, np.nan, np.nan
                 xs[:, n + 2:] = np.nan
                 break
-    # forces on the trajectory (after the loop: one vectorised evaluation per time step row)
-    for n in range(1, n_steps + 1):
+    # forces on the trajectory, after the loop
+    if not phys.other:  # no explicit t dependence: all cases and steps in one evaluation
+        rows = nc * n_steps
+        f_phys = phys.force(t[k0], zs[:, 1:].reshape(rows, nd), vs[:, 1:].reshape(rows, nd),
+                            xs[:, 1:].reshape(rows, phys.n_states)).reshape(nc, n_steps, nd)
+        fknown[:, 1:] = f_phys - as_[:, 1:] @ a_k.T
+        # the network force actually applied (lagged: the one evaluated on the step before)
+        fnet[:, 1:] = as_[:, 1:] @ phys.m_eff.T - f_phys - pre[:, k0 + 1:k0 + n_steps + 1]
+    for n in range(1, n_steps + 1) if phys.other else ():  # one evaluation per time step
         k1 = k0 + n
         f_phys = phys.force(t[k1], zs[:, n], vs[:, n], xs[:, n])
         fknown[:, n] = f_phys - as_[:, n] @ a_k.T
-        # the network force actually applied (lagged: the one evaluated on the step before)
         fnet[:, n] = as_[:, n] @ phys.m_eff.T - f_phys - pre[:, k1]
     a_ref = kin["zddot"][:, k0:k0 + n_steps + 1]
     with np.errstate(invalid="ignore", over="ignore"):
