@@ -68,6 +68,7 @@ def reconstruction_figure(
     verdicts: dict[str, str],
     moved: dict[str, xr.Dataset] | None = None,
     title: str = "BEM",
+    bias: float = 0.0,
 ) -> plt.Figure:
     """Paper Fig. 2: heave reconstructed with several partitions against the reference.
 
@@ -100,9 +101,12 @@ def reconstruction_figure(
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, ncol=3, loc="lower right")
 
-    _errors(axes[1], reconstructions, "prescribed F_bb")
+    extra = " + δF" if bias else ""
+    _errors(axes[1], reconstructions, f"prescribed F_bb{extra}")
     if moved:
-        _errors(axes[2], moved, "α, β, γ moved into ODE")
+        _errors(axes[2], moved, f"memory α, β, γ in ODE{extra}")
+    if bias:
+        axes[1].set_title(f"constant force error δF = {bias:.3g} N added to F_bb", fontsize=9)
     axes[-1].set_xlabel("time t [s]")
     fig.tight_layout()
     return fig

@@ -278,6 +278,8 @@ class WallStep(IntegratorStep):
                 d_w[d_idx] = d_body[1]
                 d_awz[d_idx] = d_body[2] * d_body[13]
 
+    # stage2 repeats stage1 on purpose: PySPH translates each stage method's own source to
+    # C/OpenCL, so a stage cannot delegate to a shared Python helper
     def stage2(self, d_idx, d_flag, d_x, d_y, d_z, d_xi, d_yi, d_zi, d_u, d_v, d_w,
                d_awx, d_awy, d_awz, d_body, d_piston):
         if d_flag[d_idx] == 1:
