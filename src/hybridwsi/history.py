@@ -297,7 +297,11 @@ def read_netcdf(path: str | os.PathLike) -> xr.Dataset:
         with xr.open_dataset(path) as f:
             ds = f.load()
     except Exception as exc:  # netCDF4/h5py raise many types on corrupt files
-        raise InputError(f"cannot read {path} as NetCDF: {exc}") from None
+        # netCDF4 reports a non-NetCDF file as "[Errno 22] Invalid argument": say what it means
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise InputError(
+            f"cannot read {path} as NetCDF: not a NetCDF/HDF5 file or corrupt ({reason})"
+        ) from None
     for name in [n for n in ds.data_vars if str(n).endswith("__re")]:
         base = str(name)[: -len("__re")]
         if base + "__im" in ds:

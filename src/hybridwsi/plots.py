@@ -26,16 +26,14 @@ def save(fig: plt.Figure, path: str | Path, dpi: int = 150) -> Path:
     return out
 
 
-def decay_validation_figure(curves: xr.Dataset, codes: dict | None = None) -> plt.Figure:
+def decay_validation_figure(curves: xr.Dataset) -> plt.Figure:
     """Paper Fig. 1: normalised heave decay, experiment (mean and 95 % band) vs our models.
 
     Parameters
     ----------
     curves : xarray.Dataset
-        ``DecayValidation.curves``: ``exp_mean``, ``exp_ci95_lower/upper`` (drop, t_exp) and
+        ``DecayValidation.curves``: ``exp_mean``, ``exp_ci95_lower/upper`` (drop_test, t_exp) and
         ``heave_over_H0`` (drop_test, model, t_exp), with ``t_exp`` in units of Te0.
-    codes : dict, optional
-        ``{drop: {code: rms}}`` shown in the legend titles.
     """
     drops = list(curves["drop_test"].values)
     fig, axes = plt.subplots(len(drops), 1, figsize=(8, 2.6 * len(drops)), sharex=True)

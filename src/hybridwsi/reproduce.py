@@ -363,7 +363,7 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
                                     water_depth=kcase["experiment"]["water_depth"])
         val = run_decay_validation(kcoeffs, progress=progress)
         to_netcdf(val.curves, out / "fig1_decay.nc")
-        plots.save(plots.decay_validation_figure(val.curves, val.codes), out / "fig1_decay.png")
+        plots.save(plots.decay_validation_figure(val.curves), out / "fig1_decay.png")
         _write_json(out / "decay_validation.json", val.to_json())
         decay_md = val.to_markdown()
         _write_text(out / "decay_validation.md", decay_md + "\n")

@@ -127,11 +127,15 @@ def published_code_files(drop: str) -> dict[str, Any]:
     return {p.name.split("_")[0]: p for p in sorted(folder.glob(f"*_{drop}.csv"))}
 
 
-def score_published_codes(drop: str, te0: float, window=(0.0, 5.0)) -> dict[str, float]:
-    """RMS of each published code of the blind comparison for one drop."""
+def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
+                          measured: xr.Dataset | None = None) -> dict[str, float]:
+    """RMS of each published code of the blind comparison for one drop.
+
+    ``measured`` is the experiment's history of that drop when the caller already read it.
+    """
     from hybridwsi import importers
 
-    exp = _measured(drop)
+    exp = _measured(drop) if measured is None else measured
     t_exp, zn_exp = exp["time"].values, exp["z"].values[:, 0]
     out = {}
     for code, path in published_code_files(drop).items():
@@ -209,7 +213,7 @@ def run_decay_validation(
             )
         )
     for drop in drops:
-        codes[drop] = score_published_codes(drop, te0, window)
+        codes[drop] = score_published_codes(drop, te0, window, measured=exp_cache[drop])
     model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
         "heave_over_H0"
     ]
