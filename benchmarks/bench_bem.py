@@ -5,7 +5,7 @@ The baseline is timed on a few frequencies only (20-45 s and ~2 GB each at 6400 
 extrapolated to the full frequency list; ours runs the full list (cache disabled). Both are
 measured in the same process. Usage::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bem.py            # paper set-up (~5-8 min)
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bem.py            # paper set-up (~8-10 min)
     python benchmarks/bench_bem.py --panels 1600 --n-omega 40         # quick look
 """
 
@@ -42,6 +42,8 @@ def main() -> None:
     p.add_argument("--panels", type=int, default=6400)
     p.add_argument("--n-omega", type=int, default=400)
     p.add_argument("--n-baseline", type=int, default=2, help="frequencies timed for the baseline")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="hybridwsi worker processes (default: automatic, all CPUs here)")
     args = p.parse_args()
 
     body = FloatingSphere.paper()
@@ -49,8 +51,13 @@ def main() -> None:
     resolution = body.resolution_for(args.panels)
 
     start = time.perf_counter()
-    ours = bem.compute(body, omega, n_panels=args.panels, use_cache=False, progress=True)
+    ours = bem.compute(body, omega, n_panels=args.panels, use_cache=False, progress=True,
+                       n_jobs=args.jobs)
     t_ours = time.perf_counter() - start
+    # the same sweep on one process: what the worker pool buys
+    start = time.perf_counter()
+    bem.compute(body, omega, n_panels=args.panels, use_cache=False, progress=True, n_jobs=1)
+    t_one = time.perf_counter() - start
 
     sample = np.geomspace(1.0, 20.0, args.n_baseline)
     t_base = baseline_per_omega(body, sample, resolution)
@@ -59,6 +66,7 @@ def main() -> None:
     print(f"mesh: {ours.attrs['n_panels']} hull + {ours.attrs['n_lid_panels']} lid panels, "
           f"{args.n_omega} frequencies (+ omega = 0, inf)")
     print(f"hybridwsi (axisymmetric): {t_ours:8.1f} s total, {t_ours / (args.n_omega + 2):.3f} s/omega")
+    print(f"  same on one process   : {t_one:8.1f} s -> workers give {t_one / t_ours:.2f} x")
     print(f"capytaine full mesh     : {t_base:8.2f} s/omega (timed on {args.n_baseline}), "
           f"extrapolated {t_base_total:8.0f} s")
     print(f"speed-up (extrapolated) : {t_base_total / t_ours:8.1f} x")

@@ -330,3 +330,22 @@ def test_paper_mesh_fresh_run(tmp_path):
     assert float(ds["added_mass_inf"][0, 0]) == pytest.approx(0.5 * M_DISP, rel=0.01)
     assert float(ds["added_mass_inf"][0, 0]) == pytest.approx(0.5 * M_DISP, rel=1e-3)
     np.testing.assert_allclose(ds["added_mass"].values[:, 0, 0] / M_DISP, table[:, 1], rtol=2e-3)
+
+
+def test_parallel_workers_give_identical_coefficients(tmp_path):
+    """Two worker processes solve the same problems as one: identical numbers, same cache key."""
+    body = FloatingSphere(radius=1.0, mass=2094.4)
+    omega = np.linspace(0.5, 2.0, 4)
+    kw = dict(n_panels=64, progress=False, use_cache=False, chunk_size=2)
+    one = bem.compute(body, omega, n_jobs=1, **kw)
+    two = bem.compute(body, omega, n_jobs=2, **kw)
+    for name in ("added_mass", "radiation_damping", "excitation_force", "added_mass_inf"):
+        np.testing.assert_array_equal(one[name].values, two[name].values)
+    assert one.attrs["input_hash"] == two.attrs["input_hash"]
+
+
+@pytest.mark.parametrize("bad", [0, -1, "two"])
+def test_bad_job_count_is_rejected(bad):
+    with pytest.raises(InputError, match="n_jobs"):
+        bem.compute(FloatingSphere(radius=1.0, mass=2094.4), [1.0], n_jobs=bad, n_panels=64,
+                    progress=False, use_cache=False)

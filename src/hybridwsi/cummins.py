@@ -104,9 +104,10 @@ def _dof_values(coeffs: xr.Dataset, name: str, dofs: list[str]) -> np.ndarray | 
         index = coeffs.indexes.get(dim)
         if dim not in var.dims or index is None or not index.is_unique:
             return None
-        pos = index.get_indexer(dofs)
-        if np.any(pos < 0):
+        labels = [str(v) for v in index]  # a handful of DOFs: a list beats pandas' indexer
+        if any(d not in labels for d in dofs):
             raise InputError(f"'{name}' has no entries for DOFs {dofs}")
+        pos = [labels.index(d) for d in dofs]
         vals = vals.take(pos, axis=var.dims.index(dim))
     return vals
 
@@ -291,60 +292,86 @@ def _as_wave(wave: Wave | Mapping | None) -> Wave | None:
 
 
 def _excitation(wave: Wave | None, coeffs: xr.Dataset, t: np.ndarray, dofs: list[str],
-                ramp: float) -> np.ndarray:
+                ramp: float) -> tuple[np.ndarray, np.ndarray | None]:
+    """F_exc (nt, n) [N] and the incident elevation η (nt,) [m] (None without waves)."""
     if wave is None:
-        return np.zeros((t.size, len(dofs)))
-    return excitation_force(wave, coeffs, t, list(dofs), ramp=ramp)
+        return np.zeros((t.size, len(dofs))), None
+    return excitation_force(wave, coeffs, t, list(dofs), ramp=ramp, with_elevation=True)
 
 
 # --------------------------------------------------------------------------- solvers
+def _foh_weights(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """FOH input weights ``(γ0, γ1)`` of a mode ``q̇ = s q + u`` over one step, ``x = s dt``.
+
+    ``q_{k+1} = e^x q_k + γ0 u_k + γ1 u_{k+1}`` with ``γ1 = dt (e^x − 1 − x)/x²`` and
+    ``γ0 = dt (1 + (x − 1) e^x)/x²``; a Taylor series below |x| = 0.1 avoids the cancellation
+    (its truncation error is < 1e-16 there, the closed form's rounding < 2e-15 above).
+    """
+    x = np.asarray(x, dtype=complex)
+    small = np.abs(x) < 0.1
+    g0, g1 = np.empty_like(x), np.empty_like(x)
+    xs = x[small]
+    s0, s1, term, fact = np.zeros_like(xs), np.zeros_like(xs), np.ones_like(xs), 2.0
+    for n in range(12):  # γ1/dt = Σ xⁿ/(n+2)!, γ0/dt = Σ (n+1) xⁿ/(n+2)!
+        s1 += term / fact
+        s0 += (n + 1) * term / fact
+        term = term * xs
+        fact *= n + 3
+    g0[small], g1[small] = s0, s1
+    xl = x[~small]
+    em1 = np.expm1(xl)
+    g1[~small] = (em1 - xl) / xl**2
+    g0[~small] = (1.0 + (xl - 1.0) * (em1 + 1.0)) / xl**2
+    return dt * g0, dt * g1
+
+
 def _solve_linear(a: np.ndarray, b: np.ndarray, dt: float, u: np.ndarray, y0: np.ndarray,
                   out: np.ndarray) -> np.ndarray:
     """Outputs ``out @ y_k`` of ``ẏ = A y + B u`` (FOH-exact), batched over cases.
 
     ``u`` (nt, n_in, n_case), ``y0`` (n_state, n_case), ``out`` (n_out, n_state);
-    returns (nt, n_out, n_case).
+    returns (nt, n_out, n_case). The system is diagonalised in continuous time,
+    ``A = V diag(s) V⁻¹``, and each mode is discretised exactly (``e^{s dt}`` and the FOH
+    weights of :func:`_foh_weights`), which is cheaper than the matrix exponential of the
+    augmented system; a defective or ill-conditioned ``A`` (e.g. a free body with C = 0, K = 0)
+    falls back to stepping with :func:`~hybridwsi.hydro.statespace.foh_matrices`.
     """
-    phi, g0, g1 = foh_matrices(a, b, dt)
     nt, n_case = u.shape[0], u.shape[2]
-    lam, vec = np.linalg.eig(phi)
+    s_cont, vec = np.linalg.eig(a)
     if np.linalg.cond(vec) > _MODAL_COND:
-        return _solve_stepping(phi, g0, g1, u, y0, out)
+        return _solve_stepping(*foh_matrices(a, b, dt), u, y0, out)
     vinv = np.linalg.inv(vec)
-    # Φ is real: a complex pair's modes are conjugate, so solve one and count it twice
-    tol = 1e-12 * max(1.0, float(np.max(np.abs(lam))))
-    keep = lam.imag >= -tol
-    lam = lam[keep]
-    weight = np.where(lam.imag > tol, 2.0, 1.0)
-    w0, w1, q0 = vinv[keep] @ g0, vinv[keep] @ g1, vinv[keep] @ y0
+    # A is real: a complex pair's modes are conjugate, so solve one and count it twice
+    tol = 1e-12 * max(1.0, float(np.max(np.abs(s_cont))))
+    keep = s_cont.imag >= -tol
+    s_cont = s_cont[keep]
+    lam = np.exp(s_cont * dt)
+    weight = np.where(s_cont.imag > tol, 2.0, 1.0)
+    g0, g1 = _foh_weights(s_cont * dt, dt)
+    vb = vinv[keep] @ b
+    w0, w1, q0 = g0[:, None] * vb, g1[:, None] * vb, vinv[keep] @ y0
     cw = (out @ vec)[:, keep] * weight  # (n_out, n_mode): output weights of the kept modes
-    # modal recursions, time last (contiguous for lfilter); u is real, so the drives' real
-    # and imaginary parts are real products (broadcast: n_in is tiny, a k = 1 matmul is slower)
-    # q_m[k] = λ_m q_m[k-1] + (W0 u_{k-1} + W1 u_k)_m, with q_m[0] = q0_m
-    ut = u.transpose(2, 1, 0)  # (n_case, n_in, nt)
-    n_mode = lam.size
-    src = np.empty((n_case, nt), complex)  # reused for every mode
-    qs = np.empty((n_case, 2 * n_mode, nt))  # Re q_m in rows m, Im q_m in rows n_mode + m
+    # modal recursions q_m[k] = λ_m q_m[k-1] + (W0 u_{k-1} + W1 u_k)_m with q_m[0] = q0_m: one
+    # first-order filter per mode and input, numerator [W1, W0] (the FOH drive), time last
+    # (contiguous for lfilter); the initial state zi makes the output start exactly at q0
+    ut = np.ascontiguousarray(u.transpose(2, 1, 0))  # (n_case, n_in, nt)
+    n_mode, n_in = lam.size, ut.shape[1]
+    qs = np.empty((2 * n_mode, n_case, nt))  # Re q_m in rows m, Im q_m in rows n_mode + m
     for m, lm in enumerate(lam):
-        src[:, 0] = q0[m]
-        for part, w0m, w1m in ((src.real, w0[m].real, w1[m].real),
-                               (src.imag, w0[m].imag, w1[m].imag)):
-            np.multiply(w1m[0], ut[:, 0, 1:], out=part[:, 1:])
-            part[:, 1:] += w0m[0] * ut[:, 0, :-1]
-            for i in range(1, ut.shape[1]):
-                part[:, 1:] += w1m[i] * ut[:, i, 1:]
-                part[:, 1:] += w0m[i] * ut[:, i, :-1]
-        if lm.imag == 0 and not np.any(cw[:, m].imag):
-            # a real mode whose Im q is never used: the real filter gives bit-identical
-            # Re q (the complex one only adds exact zero products) at about half the cost
-            qs[:, m] = scipy.signal.lfilter([1.0], [1.0, -lm.real], src.real, axis=-1)
-            qs[:, n_mode + m] = 0.0
-            continue
-        q = scipy.signal.lfilter([1.0], [1.0, -lm], src, axis=-1)
-        qs[:, m], qs[:, n_mode + m] = q.real, q.imag
+        # a real mode whose Im q is never used runs the real filter (half the cost)
+        real = s_cont[m].imag == 0 and not np.any(cw[:, m].imag)
+        cast = (lambda x: x.real) if real else (lambda x: x)
+        for i in range(n_in):
+            w1m, w0m = cast(w1[m, i]), cast(w0[m, i])
+            zi = (-w1m * ut[:, i, :1]) + (cast(q0[m])[:, None] if i == 0 else 0.0)
+            y = scipy.signal.lfilter([w1m, w0m], [1.0, -cast(lm)], ut[:, i], zi=zi)[0]
+            q = y if i == 0 else q + y
+        qs[m] = np.real(q)
+        qs[n_mode + m] = np.imag(q) if not real else 0.0
     # real part of Σ_m cw[j, m] q_m = Σ_m (Re cw Re q_m − Im cw Im q_m): one real product
-    res = np.concatenate([cw.real, -cw.imag], axis=1) @ qs  # (n_case, n_out, nt)
-    return res.transpose(2, 1, 0)  # (n_case, n_out, nt) -> (nt, n_out, n_case)
+    coef = np.concatenate([cw.real, -cw.imag], axis=1)  # (n_out, 2 n_mode)
+    res = (coef @ qs.reshape(2 * n_mode, -1)).reshape(-1, n_case, nt)  # one 2-D GEMM
+    return res.transpose(2, 0, 1)  # (n_out, n_case, nt) -> (nt, n_out, n_case)
 
 
 def _solve_stepping(phi, g0, g1, u, y0, out) -> np.ndarray:
@@ -587,7 +614,7 @@ def simulate(
                        irf_t_max=irf_t_max)
     n = sys.n
     z0v, v0v = _vector(z0, n, "z0"), _vector(zdot0, n, "zdot0")
-    f_exc = _excitation(wave, coeffs, t, sys.dofs, ramp)
+    f_exc, eta = _excitation(wave, coeffs, t, sys.dofs, ramp)
     feedback = external_force if _is_feedback(external_force) else None
     f_ext = _external(None if feedback else external_force, t, n)
     u = f_exc + f_ext
@@ -606,7 +633,7 @@ def simulate(
     inputs = _inputs(coeffs, sys, duration=duration, dt=dt, wave=wave, z0=z0v, zdot0=v0v,
                      external_force=external_force, radiation=radiation, ramp=ramp,
                      nonlinear_hydrostatics=nonlinear_hydrostatics, body=body)
-    return _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, wave, inputs)
+    return _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs)
 
 
 def _run_linear(sys: CumminsSystem, u: np.ndarray, z0: np.ndarray, v0: np.ndarray, dt: float
@@ -629,7 +656,7 @@ def _run_rk4(sys, coeffs, f_hs, wave, f_ext, feedback, t, dt, ramp, z0, v0, prog
     if f_hs is None:
         f_hs = lambda z: -sys.stiffness @ z  # noqa: E731
     t_half = np.arange(2 * t.size - 1) * (dt / 2)
-    u_half = _excitation(wave, coeffs, t_half, sys.dofs, ramp)
+    u_half = _excitation(wave, coeffs, t_half, sys.dofs, ramp)[0]
     # time series are only known on the output grid: linear interpolation at half steps
     u_half += np.stack([np.interp(t_half, t, f_ext[:, i]) for i in range(n)], axis=1)
     y0 = np.concatenate([z0, v0, np.zeros(sys.n_states)])
@@ -685,7 +712,7 @@ def _forces(sys: CumminsSystem, z, v, f_hs, mem, f_exc, f_ext) -> dict[str, np.n
             "F_ext": f_ext, "F_tot": tot}
 
 
-def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, wave, inputs) -> xr.Dataset:
+def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs) -> xr.Dataset:
     # validated here rather than by make_history: the time grid is ours (uniform) and the
     # forcing was checked on input, so only the solution itself can be non-finite
     if not all(np.all(np.isfinite(a)) for a in (z, v, mem)):
@@ -693,14 +720,15 @@ def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, wave, inputs) -> xr.Dataset:
                           "coefficients and the state-space fit")
     f = _forces(sys, z, v, f_hs, mem, f_exc, f_ext)
     acc = f.pop("zddot")
+    extra = None
+    if eta is not None:  # built with the Dataset: a later assignment costs an xarray merge
+        extra = {"eta": (("time", "probe"), eta[:, None],
+                         {"units": "m", "long_name": "incident wave elevation"})}
     hist = make_history(t, z, v, acc, forces={k: f[k] for k in FORCES}, dof=sys.dofs,
-                        mass=sys.mass, source="cummins", inputs=inputs, check=False)
+                        mass=sys.mass, source="cummins", inputs=inputs, check=False,
+                        extra_vars=extra, extra_coords={"probe": ["origin"]} if extra else None)
     if sys.ss is not None:
         hist.attrs["radiation_ss"] = json.dumps(sys.ss.to_dict())
-    if wave is not None:
-        hist["eta"] = xr.DataArray(wave.elevation(t)[:, None], dims=("time", "probe"),
-                                   coords={"probe": ["origin"]},
-                                   attrs={"units": "m", "long_name": "incident wave elevation"})
     return hist
 
 
@@ -792,8 +820,7 @@ def simulate_batch(
         wave = _as_wave(case.get("wave"))
         waves.append(None if wave is None else wave.to_dict())
         if wave is not None:
-            f_exc[:, :, c] = _excitation(wave, coeffs, t, sys.dofs, ramp)
-            eta[:, c] = wave.elevation(t)
+            f_exc[:, :, c], eta[:, c] = _excitation(wave, coeffs, t, sys.dofs, ramp)
         f_ext[:, :, c] = _external(case.get("external_force"), t, n)
     z, v, mem = _run_linear(sys, f_exc + f_ext, z0, v0, dt)
     move = (lambda a: np.moveaxis(a, 2, 0))  # (time, dof, case) -> (case, time, dof)

@@ -75,6 +75,8 @@ def make_history(
     source: str = "user",
     inputs: Mapping[str, Any] | None = None,
     check: bool = True,
+    extra_vars: Mapping[str, tuple] | None = None,
+    extra_coords: Mapping[str, Any] | None = None,
 ) -> xr.Dataset:
     """Build a TimeHistory.
 
@@ -97,6 +99,9 @@ def make_history(
         Inputs that produced it, stored as JSON in attrs for reproducibility.
     check : bool
         Run :func:`validate` on the result.
+    extra_vars, extra_coords : mapping, optional
+        Further variables ``{name: (dims, values, attrs)}`` and their coordinates, e.g. the
+        wave elevation ``eta(time, probe)`` [m]; stored as given.
 
     Returns
     -------
@@ -128,6 +133,8 @@ def make_history(
     coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "dof": dof}
     if "mass" in data_vars:
         coords["dof_j"] = dof  # at construction: a later assign_coords costs a second merge
+    data_vars.update(extra_vars or {})
+    coords.update(extra_coords or {})
     ds = xr.Dataset(
         data_vars,
         coords=coords,

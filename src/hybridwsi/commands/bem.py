@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cache-dir", default=None, help="cache folder")
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--jobs", type=int, default=None,
+                        help="worker processes (default: $HYBRIDWSI_BEM_JOBS, else all CPUs for "
+                             "long sweeps)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     ds = bem.compute(body, omega, water_depth=args.depth, n_panels=args.panels,
                      method=args.method, cache_dir=args.cache_dir, use_cache=not args.no_cache,
-                     progress=not args.quiet)
+                     progress=not args.quiet, n_jobs=args.jobs)
     wall = time.perf_counter() - start
     to_netcdf(ds, args.out)
     _print_summary(ds, body, wall, args.out)

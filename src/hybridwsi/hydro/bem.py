@@ -134,6 +134,7 @@ def compute(
     deep_water_kh: float | None = 3.0,
     use_cache: bool = True,
     chunk_size: int = CHUNK_SIZE,
+    n_jobs: int | None = None,
 ) -> xr.Dataset:
     """Linear hydrodynamic coefficients of ``body`` from Capytaine (see module docstring).
 
@@ -178,6 +179,12 @@ def compute(
         Read and write the cache (False: solve everything, write nothing).
     chunk_size : int
         Frequencies per checkpoint.
+    n_jobs : int, optional
+        Worker processes solving chunks of frequencies in parallel (one BLAS thread each).
+        Default: ``$HYBRIDWSI_BEM_JOBS``, else the usable CPU count for sweeps estimated to take
+        over 30 s and 1 below (starting a worker costs ~3 s). Capytaine's Green function runs
+        on one core, so two workers cut the paper configuration from 192 s to 129 s here.
+        Results and cache key do not depend on it.
 
     Returns
     -------
@@ -195,6 +202,7 @@ def compute(
         raise InputError(f"low_kh must be 'fingreen' or 'drop', got {low_kh!r}")
     if int(chunk_size) < 1:
         raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
+    n_jobs = _n_jobs(n_jobs)
     resolution = body.panel_resolution(resolution if resolution is not None else n_panels)
     if math.isfinite(depth) and deep_water_kh is not None:
         from hybridwsi.waves import dispersion_k
@@ -204,7 +212,7 @@ def compute(
             common = dict(dofs=dofs, wave_directions=directions, resolution=resolution,
                           cache_dir=cache_dir, progress=progress, method=method,
                           symmetric=symmetric, lid=lid, use_cache=use_cache,
-                          chunk_size=chunk_size, deep_water_kh=None)
+                          chunk_size=chunk_size, deep_water_kh=None, n_jobs=n_jobs)
             high = compute(body, omega[deep], water_depth=math.inf, include_inf=include_inf,
                            include_zero=False, **common)
             low = (compute(body, omega[~deep], water_depth=depth, include_inf=False,
@@ -249,7 +257,7 @@ def compute(
                                directions=directions, depth=depth, resolution=resolution,
                                method=method, symmetric=symmetric, lid=lid, low_kh=low_kh,
                                low_res=low_res,
-                               progress=progress, chunk_size=int(chunk_size))
+                               progress=progress, chunk_size=int(chunk_size), n_jobs=n_jobs)
     ds = _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
                    include_inf, include_zero)
     if use_cache:
@@ -345,6 +353,32 @@ def _same(a: np.ndarray, w: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------- solving
+def _n_jobs(n_jobs: int | None) -> int | None:
+    """Worker count: the argument, else ``$HYBRIDWSI_BEM_JOBS``, else None (automatic)."""
+    if n_jobs is None:
+        n_jobs = os.environ.get("HYBRIDWSI_BEM_JOBS")
+        if n_jobs is None:
+            return None
+    try:
+        n = int(n_jobs)
+    except (TypeError, ValueError):
+        raise InputError(f"n_jobs must be a positive integer, got {n_jobs!r}") from None
+    if n < 1:
+        raise InputError(f"n_jobs must be a positive integer, got {n_jobs!r}")
+    return n
+
+
+def _auto_jobs(n_freq: int, resolution: tuple[int, int]) -> int:
+    """Usable CPUs when the sweep is long enough to repay the workers' start-up (~3 s each):
+    an estimated sequential time > 30 s (about 0.5 s per frequency at 6400 hull panels, growing
+    like panels^1.5 with the axisymmetric solver), else 1."""
+    avail = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+    cpus = max(1, len(avail) if avail else (os.cpu_count() or 1))
+    panels = resolution[0] * resolution[1] / 2.0
+    estimate = n_freq * 0.5 * (panels / 6400.0) ** 1.5
+    return cpus if estimate > 30.0 else 1
+
+
 @contextlib.contextmanager
 def blas_single_thread() -> Iterator[None]:
     """Limit BLAS to one thread (threadpoolctl), else warn unless OPENBLAS_NUM_THREADS is set."""
@@ -375,36 +409,82 @@ def _quiet_capytaine():
 
 
 def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, resolution, method,
-                   symmetric, lid, low_kh, progress, chunk_size, low_res=None) -> xr.Dataset:
-    """Solve ``todo`` frequencies chunk by chunk, checkpointing into ``store_path``."""
-    import capytaine as cpt
+                   symmetric, lid, low_kh, progress, chunk_size, n_jobs=None, low_res=None
+                   ) -> xr.Dataset:
+    """Solve ``todo`` frequencies chunk by chunk, checkpointing into ``store_path``.
+
+    With ``n_jobs > 1`` the chunks go to a pool of worker processes (each builds the mesh and
+    solver once); finished chunks are merged and checkpointed here, in completion order.
+    (Capytaine's own ``n_jobs`` ships the solver with every frequency and was 3x slower here.)
+    """
     from tqdm.auto import tqdm
 
     finite = todo[np.isfinite(todo) & (todo > 0)]
     limits = todo[~(np.isfinite(todo) & (todo > 0))]
+    n_jobs = _auto_jobs(finite.size, resolution) if n_jobs is None else n_jobs
+    if n_jobs > 1:  # chunks small enough to keep every worker busy
+        chunk_size = max(1, min(chunk_size, -(-finite.size // (2 * n_jobs))))
     chunks = [finite[i:i + chunk_size] for i in range(0, finite.size, chunk_size)]
     if limits.size:
         chunks.append(limits)  # radiation only; solved last so partial progress is visible first
-    cbody = body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric, lid=lid)
-    solver = cpt.BEMSolver(method=method)
-    _warn_mesh_resolution(cbody, finite, depth, body.g)
+    task = dict(body=body, dofs=tuple(dofs), directions=directions, depth=depth,
+                resolution=resolution, method=method, symmetric=symmetric, lid=lid,
+                low_kh=low_kh, low_res=low_res)
+    _warn_mesh_resolution(body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric,
+                                              lid=lid), finite, depth, body.g)
     bar = tqdm(total=todo.size, unit="ω", desc="BEM", disable=not progress)
+
+    def done(part: xr.Dataset) -> None:
+        nonlocal store
+        store = part if store is None else _merge(store, part)
+        if store_path is not None:
+            to_netcdf(store, store_path)  # checkpoint: atomic
+        bar.update(part.sizes["omega"])
+
     try:
-        with blas_single_thread(), warnings.catch_warnings(), _quiet_capytaine():
-            warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
+        if n_jobs == 1 or len(chunks) == 1:
             for chunk in chunks:
-                part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
-                                    rho=body.rho, g=body.g)
-                if math.isfinite(depth):
-                    part = _fix_low_kh(part, body, dofs, directions, depth,
-                                       low_res or resolution, method, symmetric, low_kh)
-                store = part if store is None else _merge(store, part)
-                if store_path is not None:
-                    to_netcdf(store, store_path)  # checkpoint: atomic
-                bar.update(chunk.size)
+                done(_solve_task(chunk, **task))
+        else:
+            import joblib
+
+            # loky workers: reused for every chunk, one BLAS/OpenMP thread each, and (unlike
+            # multiprocessing's spawn) safe in scripts without an ``if __name__`` guard
+            with joblib.parallel_config(backend="loky", inner_max_num_threads=1):
+                parts = joblib.Parallel(n_jobs=min(n_jobs, len(chunks)),
+                                        return_as="generator_unordered")(
+                    joblib.delayed(_solve_task)(chunk, **task) for chunk in chunks)
+                for part in parts:
+                    done(part)
     finally:
         bar.close()
     return store
+
+
+_WORKER_CACHE: dict[str, Any] = {}
+
+
+def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, resolution, method,
+                symmetric, lid, low_kh, low_res) -> xr.Dataset:
+    """Solve one chunk of frequencies (in this process or a worker); the mesh and solver are
+    built once per process and configuration."""
+    import capytaine as cpt
+
+    key = repr((body.to_json(), dofs, resolution, symmetric, lid, method))
+    if key not in _WORKER_CACHE:
+        _WORKER_CACHE.clear()  # one configuration at a time: meshes are large
+        _WORKER_CACHE[key] = (body.capytaine_body(list(dofs), resolution=resolution,
+                                                  symmetric=symmetric, lid=lid),
+                              cpt.BEMSolver(method=method))
+    cbody, solver = _WORKER_CACHE[key]
+    with blas_single_thread(), warnings.catch_warnings(), _quiet_capytaine():
+        warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
+        part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
+                            rho=body.rho, g=body.g)
+        if math.isfinite(depth):
+            part = _fix_low_kh(part, body, list(dofs), directions, depth, low_res or resolution,
+                               method, symmetric, low_kh)
+    return part
 
 
 def _solve_chunk(solver, cbody, omegas: np.ndarray, *, directions: np.ndarray, depth: float,
