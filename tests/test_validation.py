@@ -33,3 +33,14 @@ def test_scoring_reproduces_the_value_quoted_for_lpf2():
     # the best linear code at 0.1D is LPF2
     lpf = {k: v for k, v in codes.items() if k.startswith("LPF")}
     assert min(lpf, key=lpf.get) == "LPF2"
+
+
+def test_crossing_period_of_a_damped_sinusoid_is_its_damped_period():
+    """z = e^{-ζωt} cos(ω_d t): zero crossings are exactly π/ω_d apart."""
+    from hybridwsi.validation import crossing_period
+
+    wd = 2 * np.pi / 0.93
+    t = np.linspace(0.0, 6.0, 6001)
+    z = np.exp(-0.3 * t) * np.cos(wd * t)
+    assert crossing_period(t, z, (0.0, 5.0)) == pytest.approx(0.93, rel=1e-5)
+    assert np.isnan(crossing_period(t, z, (0.0, 0.5)))  # fewer than three crossings

@@ -60,6 +60,23 @@ def rms_heave_error(
     return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
 
 
+def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
+    """Mean period [same unit as ``t``] from the zero crossings of ``z`` inside ``window``.
+
+    Crossings are located by linear interpolation; the period is twice the mean spacing of
+    consecutive crossings (the first half cycle, which depends on the release, is skipped).
+    NaN when fewer than three crossings fall in the window.
+    """
+    t, z = np.asarray(t, float), np.asarray(z, float)
+    sel = (t >= window[0]) & (t <= window[1])
+    t, z = t[sel], z[sel]
+    i = np.nonzero(np.signbit(z[:-1]) != np.signbit(z[1:]))[0]
+    tc = t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i])
+    if tc.size < 3:
+        return float("nan")
+    return float(2.0 * np.mean(np.diff(tc[1:])))
+
+
 @dataclass
 class DecayValidation:
     """Results of :func:`run_decay_validation`.
@@ -70,6 +87,9 @@ class DecayValidation:
         ``{drop: {"linear": rms, "nonlinear_hydrostatics": rms}}``.
     codes : dict
         ``{drop: {code: rms}}`` for the published codes, computed the same way.
+    periods : dict
+        ``{drop: {"experiment" | model | code: period / Te0}}``: mean zero-crossing period over
+        the RMS window (:func:`crossing_period`), the quantity behind most of the RMS error.
     curves : xarray.Dataset
         Normalised heave of the experiment (mean, CI bounds) and of our models on the
         experiment's time grid, per drop; the data behind Fig. 1.
@@ -79,6 +99,7 @@ class DecayValidation:
     codes: dict[str, dict[str, float]]
     curves: xr.Dataset
     inputs: dict[str, Any] = field(default_factory=dict)
+    periods: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         """``{"01D": {"rms": ..., "rms_nonlinear_hydrostatics": ..., "codes": {...}}, ...}``."""
@@ -88,6 +109,7 @@ class DecayValidation:
                 "rms": self.rms[drop]["linear"],
                 "rms_nonlinear_hydrostatics": self.rms[drop].get("nonlinear_hydrostatics"),
                 "codes": self.codes.get(drop, {}),
+                "period_over_Te0": self.periods.get(drop, {}),
             }
         return out
 
@@ -108,6 +130,13 @@ class DecayValidation:
                 if nl is not None
                 else f"| {drop} | {r['linear']:.4f} | – | " + " | ".join(cells) + " |"
             )
+        if self.periods:
+            names = list(next(iter(self.periods.values())))
+            rows += ["", "Mean zero-crossing period / Te0 over the same window:", "",
+                     "| drop | " + " | ".join(names) + " |", "|" + "---|" * (1 + len(names))]
+            for drop, per in self.periods.items():
+                rows.append(f"| {drop} | " + " | ".join(
+                    f"{per[n]:.4f}" if n in per else "–" for n in names) + " |")
         return "\n".join(rows)
 
 
@@ -128,10 +157,12 @@ def published_code_files(drop: str) -> dict[str, Any]:
 
 
 def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
-                          measured: xr.Dataset | None = None) -> dict[str, float]:
+                          measured: xr.Dataset | None = None,
+                          periods: dict[str, float] | None = None) -> dict[str, float]:
     """RMS of each published code of the blind comparison for one drop.
 
-    ``measured`` is the experiment's history of that drop when the caller already read it.
+    ``measured`` is the experiment's history of that drop when the caller already read it;
+    ``periods``, when given, receives each code's :func:`crossing_period` / Te0.
     """
     from hybridwsi import importers
 
@@ -142,6 +173,8 @@ def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
         num = importers.read_kramer_numerical(path, require_uniform=False)
         z = num["z"].values[:, 0]
         out[code] = rms_heave_error(num["time"].values, z / z[0], t_exp, zn_exp, te0, window)
+        if periods is not None:
+            periods[code] = crossing_period(num["time"].values / te0, z, window)
     return out
 
 
@@ -183,6 +216,7 @@ def run_decay_validation(
 
     rms: dict[str, dict[str, float]] = {}
     codes: dict[str, dict[str, float]] = {}
+    periods: dict[str, dict[str, float]] = {}
     curves = []
     jobs = [(d, v) for d in drops for v in variants]
     bar = tqdm(jobs, desc="decay runs", disable=not progress)
@@ -206,6 +240,9 @@ def run_decay_validation(
         rms.setdefault(drop, {})[variant] = rms_heave_error(
             hist["time"].values, zn, t_exp, zn_exp, te0, window
         )
+        per = periods.setdefault(drop, {})
+        per.setdefault("experiment", crossing_period(t_exp / te0, zn_exp, window))
+        per[variant] = crossing_period(hist["time"].values / te0, zn, window)
         on_grid = np.interp(t_exp, hist["time"].values, zn, left=np.nan)
         curves.append(
             xr.DataArray(on_grid, dims="t_exp", coords={"t_exp": t_exp / te0}).expand_dims(
@@ -213,7 +250,8 @@ def run_decay_validation(
             )
         )
     for drop in drops:
-        codes[drop] = score_published_codes(drop, te0, window, measured=exp_cache[drop])
+        codes[drop] = score_published_codes(drop, te0, window, measured=exp_cache[drop],
+                                            periods=periods[drop])
     model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
         "heave_over_H0"
     ]
@@ -234,4 +272,5 @@ def run_decay_validation(
     ds = xr.merge([exp_ds, model])
     ds["t_exp"].attrs.update(units="1", long_name="t / Te0")
     ds.attrs.update(te0=te0, rms_window=str(window), dt=dt)
-    return DecayValidation(rms=rms, codes=codes, curves=ds, inputs={"dt": dt, "te0": te0})
+    return DecayValidation(rms=rms, codes=codes, curves=ds, inputs={"dt": dt, "te0": te0},
+                           periods=periods)
