@@ -108,3 +108,28 @@ def test_full_configuration_table1_within_one_percent_of_paper(tmp_path):
     assert bem["3"]["alpha"] == pytest.approx(10.56, rel=0.01)
     assert bem["3"]["gamma"] == pytest.approx(692.5, rel=0.01)
     assert max(abs(bem[k]["beta"]) for k in bem) <= 0.1
+
+
+def test_sph_column_from_a_user_history(quick_results, tmp_path):
+    """--sph-history regresses any history file like the BEM one: fed the BEM run itself, the
+    SPH column must equal the BEM column, and case 1 must return α = m (Newton)."""
+    src = quick_results / "histories" / "bem_regular_waves.nc"
+    out = tmp_path / "res"
+    assert main(["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid",
+                 "--sph-history", str(src), "--out", str(out)]) == 0
+    t = json.loads((out / "table1.json").read_text())
+    for case in ("1", "2", "3"):
+        for key in ("alpha", "beta", "gamma"):
+            assert t["SPH"][case][key] == pytest.approx(t["BEM"][case][key], rel=1e-9, abs=1e-9)
+    assert t["SPH"]["1"]["alpha"] == pytest.approx(M, rel=1e-3)
+    assert (out / "fig2_sph.png").is_file()
+    assert "bem_regular_waves.nc" in (out / "table1.md").read_text()
+
+
+def test_sph_history_without_force_is_a_clear_error(tmp_path, capsys):
+    bad = tmp_path / "motion_only.csv"
+    bad.write_text("time [s],z [m]\n" + "".join(f"{0.01 * i},{0.001 * i}\n" for i in range(50)))
+    assert main(["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid",
+                 "--sph-history", str(bad), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "F_tot" in err[0]

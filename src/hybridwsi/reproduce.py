@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi.errors import InputError
 from hybridwsi.history import to_netcdf
 from hybridwsi.history import write_json as _write_json
 from hybridwsi.history import write_text as _write_text
@@ -293,9 +294,54 @@ def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
     ])
 
 
+def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None = None,
+                dp: float | None = None, mass: float | None = None, openmp: bool = False,
+                progress: bool = True) -> tuple[xr.Dataset | None, str]:
+    """The SPH history of Table 1's SPH column and a note saying where it came from.
+
+    ``recompute``: run ``hybridwsi sph regular3d`` now (resumable: an interrupted run continues
+    from ``out/histories/sph_regular_waves.nc.ckpt.npz``); else ``path``: any history file
+    ``read_history`` understands (NetCDF, CSV, DualSPHysics FloatingInfo with ``mass``); else
+    the history shipped in ``hybridwsi/data``; else none ("pending").
+    """
+    from hybridwsi.history import read_history
+
+    if recompute:
+        from hybridwsi.sph import tank
+        from hybridwsi.sph.run import run_case
+
+        case = tank.build("regular3d", dp=dp)
+        target = out / "histories" / SPH_HISTORY
+        hist = run_case(case, target, resume=True, progress=progress, openmp=openmp)
+        return _needs_force(hist, target), (
+            f"SPH column from a run made now: `hybridwsi sph regular3d --dp {case.dp:g}` "
+            f"({case.n_particles} particles), written to histories/{SPH_HISTORY}.")
+    shipped = Path(__file__).parent / "data" / SPH_HISTORY
+    src = Path(path) if path is not None else (shipped if shipped.is_file() else None)
+    if src is None:
+        return None, ("SPH column: pending; no SPH history is shipped yet (run with "
+                      "`--recompute-sph` or pass one with `--sph-history FILE`).")
+    hist = _needs_force(read_history(src, mass=mass), src)
+    return hist, (f"SPH column from {src.name} ({hist.attrs.get('source', '?')}; "
+                  f"inputs: {hist.attrs.get('inputs', '?')[:200]}).")
+
+
+def _needs_force(hist: xr.Dataset, src: Path) -> xr.Dataset:
+    missing = [v for v in ("F_tot", "z", "zdot", "zddot") if v not in hist]
+    if missing:
+        raise InputError(f"{src}: the SPH history needs {', '.join(missing)} for Table 1")
+    return hist
+
+
 def run(out: str | Path = "results", *, quick: bool = False, progress: bool = True,
-        decay: bool = True, hybrid: bool = True) -> dict[str, Any]:
-    """Run the whole reproduction and write the results folder. Returns the summary dict."""
+        decay: bool = True, hybrid: bool = True, recompute_sph: bool = False,
+        sph_path: str | Path | None = None, sph_dp: float | None = None,
+        sph_openmp: bool = False) -> dict[str, Any]:
+    """Run the whole reproduction and write the results folder. Returns the summary dict.
+
+    ``recompute_sph``, ``sph_path``, ``sph_dp`` and ``sph_openmp`` choose the SPH column's
+    history (:func:`sph_history`).
+    """
     from hybridwsi import __version__, bodies, cummins, waves
     from hybridwsi.cases import load_case
 
@@ -323,14 +369,10 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
 
     partitions = table1_partitions(coeffs)
     ours = {"BEM": regress_table1(window, partitions)}
-    sph_note = "SPH column: pending (issue 'SPH numerical wave tank'); no SPH history is shipped yet."
-    sph_path = Path(__file__).parent / "data" / SPH_HISTORY
-    if sph_path.is_file():
-        from hybridwsi.history import read_netcdf
-
-        sph = read_netcdf(sph_path)
+    sph, sph_note = sph_history(out, recompute=recompute_sph, path=sph_path, dp=sph_dp,
+                                mass=b["mass"], openmp=sph_openmp, progress=progress)
+    if sph is not None:
         ours["SPH"] = regress_table1(sph.sel(time=slice(rw["window_start"], None)), partitions)
-        sph_note = f"SPH column from {SPH_HISTORY} ({sph.attrs.get('source', '?')})."
     steady = regress_table1(hist.sel(time=slice(rw["steady_state_start"], None)), partitions)
     _write_json(out / "table1_steady_state.json",
                 {"window_start_s": rw["steady_state_start"],
