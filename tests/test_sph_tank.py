@@ -37,24 +37,34 @@ def test_hydrostatic_tank_bottom_pressure_3_percent():
     assert _bottom_pressure_ratio(0.01) == pytest.approx(1.0, abs=0.03)
 
 
-def _front_errors(dp, a=0.25):
+def _front_errors(dp, a=0.25, data=None):
     case = tank.dam_break(dp=dp, a=a, tf=0.42)
     hist = run_case(case, progress=False)
-    return dam_break.front_vs_experiment(hist, a, case.g)
+    return dam_break.front_vs_experiment(hist, a, case.g, data=data), hist
 
 
 def test_dam_break_front_tiny():
     # Martin & Moyce (1952), n^2 = 2: at 12 particles across the column the surge front must
     # follow the measured Z(T) within 15 % once the gate-opening phase is over (T >= 1.5)
-    r = _front_errors(0.02)
+    r, hist = _front_errors(0.02)
     late = r["T"] >= 1.5
     assert late.sum() >= 3
     assert np.all(r["rel_err"][late] < 0.15), r
+    # early times: an instantaneous release runs ahead of the experiment (its gate takes time
+    # to lift), never behind it; a start from uniform density or a late time origin would lag
+    early = ~late
+    assert np.all(r["Z_sph"][early] > r["Z_exp"][early]), r
+    # and it must approach an independent computation of the same instantaneous release,
+    # Koshizuka & Oka's (1996) MPS front, up to T = 3: at most 13 % behind it at a/dp = 12.5
+    # (8 % at a/dp = 40)
+    ref = dam_break.front_vs_experiment(hist, 0.25, tank.G, data=dam_break.KOSHIZUKA_OKA_MPS)
+    assert np.all(ref["rel_err"] < 0.15), ref
 
 
 @pytest.mark.slow
 def test_dam_break_front_10_percent():
-    r = _front_errors(0.25 / 40)
+    # T >= 1.5 only: at T = 0.83 and 1.22 the front is 11-13 % ahead (see dam_break.py)
+    r, _ = _front_errors(0.25 / 40)
     late = r["T"] >= 1.5
     assert np.all(r["rel_err"][late] < 0.10), r
 

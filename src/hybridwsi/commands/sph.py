@@ -19,6 +19,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("case", choices=CASES, help="case to run")
     parser.add_argument("--dp", type=float, default=None, help="particle spacing [m]")
     parser.add_argument("--tf", type=float, default=None, help="final time [s]")
+    parser.add_argument("--depth", type=float, default=None,
+                        help="still-water depth [m] (cases with a depth; default the case's)")
     parser.add_argument("--out", default=None, help="output NetCDF (default sph_<case>.nc)")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")
@@ -37,11 +39,11 @@ def run(args: argparse.Namespace) -> int:
     from hybridwsi.sph import tank
     from hybridwsi.sph.run import run_case
 
-    for name in ("dp", "tf"):
+    for name in ("dp", "tf", "depth"):
         v = getattr(args, name)
         if v is not None and not v > 0:
             raise InputError(f"--{name} must be positive, got {v}")
-    case = tank.build(args.case, dp=args.dp, tf=args.tf)
+    case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth)
     out = args.out or f"sph_{args.case}.nc"
     print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} s, "
           f"tf = {case.tf} s -> {out}")

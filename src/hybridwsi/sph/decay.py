@@ -8,6 +8,8 @@ README: heave normalised by the measured drop height, time by Te0 = 0.7561 s).
 
 from __future__ import annotations
 
+import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -28,21 +30,66 @@ def load_experiment(drop: str = "01D", data_dir: str | Path = DATA_DIR) -> pd.Da
     return pd.read_csv(path)
 
 
-def crossing_periods(t: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """Successive full-period estimates [s]: twice the spacing of zero crossings of z."""
+def crossing_periods(t: np.ndarray, z: np.ndarray, z_eq: float = 0.0) -> np.ndarray:
+    """Successive full-period estimates [s]: twice the spacing of the crossings of z = z_eq.
+
+    Crossings must be taken about the record's own equilibrium: a strongly damped record
+    oscillating about a shifted mean otherwise gives spurious long "periods".
+    """
+    z = np.asarray(z, dtype=float) - z_eq
     s = np.sign(z)
     i = np.flatnonzero(s[:-1] * s[1:] < 0)
     tc = t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i])
     return 2.0 * np.diff(tc)
 
 
+def equilibrium_shift(z0: float, radius: float, tank_area: float) -> float:
+    """Rise [m] of the heave equilibrium of a sphere released z0 [m] above its half-submerged
+    equilibrium in a closed tank of still-water area ``tank_area`` [m^2] (whole tank).
+
+    The sphere's immersed volume grows from the cap of height R - z0 to (2/3) pi R^3 as it
+    settles; that water raises the free surface and the sphere floats up with it. Small in the
+    wave basin (0.4 % of z0 there), 1-3 % of z0 in the SPH tanks.
+    """
+    if not (0.0 <= z0 < radius) or tank_area <= math.pi * radius ** 2:
+        raise InputError(f"need 0 <= z0 < R and a tank wider than the sphere (z0 = {z0}, "
+                         f"R = {radius}, area = {tank_area})")
+    h = radius - z0
+    v_release = math.pi * h * h * (3.0 * radius - h) / 3.0
+    dv = 2.0 / 3.0 * math.pi * radius ** 3 - v_release
+    return dv / (tank_area - math.pi * radius ** 2)
+
+
+def _sim_equilibrium(hist: xr.Dataset, z0: float) -> float:
+    """Equilibrium shift [m] of an SPH decay3d history from its recorded inputs (else 0)."""
+    try:
+        inp = json.loads(hist.attrs.get("inputs", "{}"))
+    except (TypeError, ValueError):
+        return 0.0
+    if inp.get("case") != "decay3d":
+        return 0.0
+    # quarter domain: the whole tank is (2 half_width)^2
+    return equilibrium_shift(z0, 0.5 * float(inp["diameter"]), 4.0 * float(inp["half_width"]) ** 2)
+
+
+def first_extrema(t: np.ndarray, z: np.ndarray) -> tuple[float, float, float, float]:
+    """Time [s] and value of the first trough after release, then of the next crest."""
+    i1 = int(np.argmax(np.diff(z) > 0)) if np.any(np.diff(z) > 0) else len(z) - 1
+    after = np.flatnonzero(np.diff(z[i1:]) < 0)
+    i2 = i1 + (int(after[0]) if len(after) else len(z) - 1 - i1)
+    return float(t[i1]), float(z[i1]), float(t[i2]), float(z[i2])
+
+
 def compare_decay(hist: xr.Dataset, z0: float, drop: str = "01D", n_periods: float = 5.0,
-                  data_dir: str | Path = DATA_DIR) -> dict[str, float]:
-    """Period and RMS error of z/H0 over [0, n_periods Te0] against the experiment.
+                  data_dir: str | Path = DATA_DIR, z_eq: float | None = None) -> dict[str, float]:
+    """Period, first extrema and RMS error of z/H0 over [0, n_periods Te0] against the experiment.
 
     Returns a dict with the simulated and measured mean period of the first two full cycles
-    [s] (from zero crossings), their relative difference, the RMS of the difference of z/H0,
-    and the covered time (the comparison is cut to the shorter record).
+    [s] (from crossings of the equilibrium; ``z_eq`` [m] is the simulated one, by default
+    :func:`equilibrium_shift` for a decay3d history), their relative difference, the first
+    trough and crest (time [s], z/H0) of both, the period from them (2 x trough-to-crest time,
+    robust to the mean level and to heavy damping), the RMS of the difference of z/H0 and the
+    covered time (the comparison is cut to the shorter record).
     """
     exp = load_experiment(drop, data_dir)
     te = exp["t_over_Te0"].to_numpy() * TE0
@@ -55,10 +102,17 @@ def compare_decay(hist: xr.Dataset, z0: float, drop: str = "01D", n_periods: flo
         raise InputError("simulation too short to compare with the experiment")
     zs = np.interp(te[sel], t, z)
     rms = float(np.sqrt(np.mean((zs - ze[sel]) ** 2)))
-    p_sim = crossing_periods(t[t <= t_end], z[t <= t_end])
+    zq = (_sim_equilibrium(hist, z0) if z_eq is None else z_eq) / z0
+    p_sim = crossing_periods(t[t <= t_end], z[t <= t_end], zq)
     p_exp = crossing_periods(te[sel], ze[sel])
     n = min(2, len(p_sim), len(p_exp))
-    out = {"rms_z_over_H0": rms, "t_compared": float(t_end)}
+    out = {"rms_z_over_H0": rms, "t_compared": float(t_end), "z_eq_over_H0": zq}
+    for name, (tt, zz) in {"sim": (t[t <= t_end], z[t <= t_end]),
+                           "exp": (te[sel], ze[sel])}.items():
+        t1, z1, t2, z2 = first_extrema(tt, zz)
+        out.update({f"trough_t_{name}": t1, f"trough_{name}": z1, f"crest_t_{name}": t2,
+                    f"crest_{name}": z2, f"period_extrema_{name}": 2.0 * (t2 - t1)})
+    out["period_extrema_rel_err"] = out["period_extrema_sim"] / out["period_extrema_exp"] - 1.0
     if n >= 1:
         out.update(period_sim=float(np.mean(p_sim[:n])), period_exp=float(np.mean(p_exp[:n])))
         out["period_rel_err"] = out["period_sim"] / out["period_exp"] - 1.0
