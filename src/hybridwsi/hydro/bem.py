@@ -74,7 +74,7 @@ def paper_configuration() -> dict[str, Any]:
             "n_panels": DEFAULT_PANELS, "water_depth": math.inf, "method": "direct"}
 
 
-#: shipped result of ``compute(**paper_configuration())`` (see data/README_bem.md)
+#: shipped result of ``compute(**paper_configuration())`` (see data/README.md)
 PAPER_COEFFS = Path(__file__).resolve().parent.parent / "data" / "bem_paper_sphere.nc"
 
 
@@ -92,7 +92,7 @@ def _shipped(input_hash: str) -> xr.Dataset | None:
     """A coefficient file shipped in ``hybridwsi/data/bem_*.nc`` made with exactly these inputs.
 
     The paper's configurations take minutes to solve; shipping their results (with the
-    command that made them, data/README_bem.md) makes ``hybridwsi reproduce`` fast on a fresh
+    command that made them, data/README.md) makes ``hybridwsi reproduce`` fast on a fresh
     machine. A file is used only when its ``input_hash`` (all inputs and versions) matches.
     """
     for path in sorted(PAPER_COEFFS.parent.glob("bem_*.nc")):
