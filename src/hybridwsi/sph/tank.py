@@ -456,10 +456,11 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
 
 
 def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1.2,
-            z0_over_d: float = 0.1, tf: float = 5 * 0.7561, c0_factor: float = 10.0,
+            z0_over_d: float = 0.1, tf: float = 5 * 0.7561 + 0.05, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA) -> SPHCase:
     """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D) on a quarter
-    domain with symmetry planes x = 0 and y = 0; walls at ``half_width`` [m]."""
+    domain with symmetry planes x = 0 and y = 0; walls at ``half_width`` [m]. The default
+    ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS window."""
     case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
                       alpha=alpha)
