@@ -183,7 +183,7 @@ def compute(
         Worker processes solving chunks of frequencies in parallel (one BLAS thread each).
         Default: ``$HYBRIDWSI_BEM_JOBS``, else the usable CPU count for sweeps estimated to take
         over 30 s and 1 below (starting a worker costs ~3 s). Capytaine's Green function runs
-        on one core, so two workers cut the paper configuration from 192 s to 129 s here.
+        on one core, so two workers cut the paper configuration from 170 s to 122 s here.
         Results and cache key do not depend on it.
 
     Returns
