@@ -304,13 +304,15 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
     ``read_history`` understands (NetCDF, CSV, DualSPHysics FloatingInfo with ``mass``); else
     the history shipped in ``hybridwsi/data``; else none ("pending").
     """
+    from hybridwsi.cases import load_case
     from hybridwsi.history import read_history
 
     if recompute:
         from hybridwsi.sph import tank
         from hybridwsi.sph.run import run_case
 
-        case = tank.build("regular3d", dp=dp)
+        cfg = load_case("paper_sphere")["sph_regular_waves"]  # the shipped run's set-up
+        case = tank.build("regular3d", dp=dp or cfg["dp"], depth=cfg["depth"], tf=cfg["tf"])
         target = out / "histories" / SPH_HISTORY
         hist = run_case(case, target, resume=True, progress=progress, openmp=openmp)
         return _needs_force(hist, target), (

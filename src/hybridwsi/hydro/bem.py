@@ -430,8 +430,8 @@ def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, re
     task = dict(body=body, dofs=tuple(dofs), directions=directions, depth=depth,
                 resolution=resolution, method=method, symmetric=symmetric, lid=lid,
                 low_kh=low_kh, low_res=low_res)
-    _warn_mesh_resolution(body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric,
-                                              lid=lid), finite, depth, body.g)
+    cbody, _ = _body_and_solver(body, tuple(dofs), resolution, symmetric, lid, method)
+    _warn_mesh_resolution(cbody, finite, depth, body.g)
     bar = tqdm(total=todo.size, unit="ω", desc="BEM", disable=not progress)
 
     def done(part: xr.Dataset) -> None:
@@ -464,10 +464,9 @@ def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, re
 _WORKER_CACHE: dict[str, Any] = {}
 
 
-def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, resolution, method,
-                symmetric, lid, low_kh, low_res) -> xr.Dataset:
-    """Solve one chunk of frequencies (in this process or a worker); the mesh and solver are
-    built once per process and configuration."""
+def _body_and_solver(body, dofs: tuple, resolution, symmetric: bool, lid: bool, method: str):
+    """Capytaine body and solver, built once per process and configuration (the parent's
+    mesh-resolution check and a sequential sweep share them; each worker builds its own)."""
     import capytaine as cpt
 
     key = repr((body.to_json(), dofs, resolution, symmetric, lid, method))
@@ -476,7 +475,13 @@ def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, resolution,
         _WORKER_CACHE[key] = (body.capytaine_body(list(dofs), resolution=resolution,
                                                   symmetric=symmetric, lid=lid),
                               cpt.BEMSolver(method=method))
-    cbody, solver = _WORKER_CACHE[key]
+    return _WORKER_CACHE[key]
+
+
+def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, resolution, method,
+                symmetric, lid, low_kh, low_res) -> xr.Dataset:
+    """Solve one chunk of frequencies (in this process or a worker)."""
+    cbody, solver = _body_and_solver(body, tuple(dofs), resolution, symmetric, lid, method)
     with blas_single_thread(), warnings.catch_warnings(), _quiet_capytaine():
         warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
         part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
