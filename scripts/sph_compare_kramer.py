@@ -1,15 +1,59 @@
 #!/usr/bin/env python
-"""Compare an SPH decay history (hybridwsi sph decay3d/decay2d) with Kramer et al. (2021).
+"""Compare SPH decay histories (hybridwsi sph decay3d) with Kramer et al. (2021).
 
     python scripts/sph_compare_kramer.py results/sph/decay3d_dp0.03.nc
+    python scripts/sph_compare_kramer.py new.nc:"smooth body, D/10" old.nc:"lattice, D/10" \
+        --png results/sph/decay3d_vs_kramer.png
+
+Prints the comparison (periods, first extrema, RMS of z/H0 over 5 Te0) of each run as JSON.
+With ``--png`` it also draws the runs over the experiment and saves the curves behind the
+figure next to it (same name, ``.nc``).
 """
 
+import argparse
 import json
-import sys
+from pathlib import Path
 
-from hybridwsi.history import read_netcdf
-from hybridwsi.sph.decay import compare_decay
+import numpy as np
+import xarray as xr
 
-hist = read_netcdf(sys.argv[1])
-z0 = float(hist["z"].values[0, 0])
-print(json.dumps(compare_decay(hist, z0), indent=1))
+from hybridwsi.history import read_netcdf, to_netcdf
+from hybridwsi.sph.decay import TE0, compare_decay, load_experiment
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs", nargs="+", help="history NetCDF, optionally FILE:LABEL")
+    ap.add_argument("--png", default=None, help="figure of the runs over the experiment")
+    a = ap.parse_args()
+    exp = load_experiment("01D")
+    t = exp["t_over_Te0"].to_numpy()
+    labels, curves, report = [], [], {}
+    for spec in a.runs:
+        path, _, label = spec.partition(":")
+        hist = read_netcdf(path)
+        z0 = float(hist["z"].values[0, 0])
+        report[label or path] = compare_decay(hist, z0)
+        zs = hist["z"].values[:, 0] / z0
+        ts = hist["time"].values / TE0
+        inside = (t >= ts[0]) & (t <= ts[-1])
+        curves.append(np.where(inside, np.interp(t, ts, zs), np.nan))
+        labels.append(label or Path(path).stem)
+    print(json.dumps(report, indent=1))
+    if a.png:
+        from hybridwsi.plots import save, sph_decay_figure
+
+        ds = xr.Dataset(
+            {"exp_mean": ("t", exp["x3_over_H0m_mean"].to_numpy()),
+             "exp_ci95_lower": ("t", exp["ci95_lower"].to_numpy()),
+             "exp_ci95_upper": ("t", exp["ci95_upper"].to_numpy()),
+             "heave_over_H0": (("run", "t"), np.array(curves))},
+            coords={"t": ("t", t, {"units": "1", "long_name": "t / Te0"}), "run": labels},
+            attrs={"runs": json.dumps(a.runs), "comparison": json.dumps(report)})
+        save(sph_decay_figure(ds), a.png)
+        to_netcdf(ds, Path(a.png).with_suffix(".nc"))
+        print(f"wrote {a.png} and {Path(a.png).with_suffix('.nc')}")
+
+
+if __name__ == "__main__":
+    main()

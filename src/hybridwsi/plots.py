@@ -108,3 +108,31 @@ def reconstruction_figure(
     axes[-1].set_xlabel("time t [s]")
     fig.tight_layout()
     return fig
+
+
+def sph_decay_figure(curves: xr.Dataset) -> plt.Figure:
+    """SPH heave decay runs against the Kramer et al. (2021) experiment on the same axes.
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        ``exp_mean``, ``exp_ci95_lower/upper`` (t) and ``heave_over_H0`` (run, t), with ``t``
+        in units of Te0 (see ``scripts/sph_compare_kramer.py``).
+    """
+    fig, ax = plt.subplots(figsize=(8, 3.4))
+    t = curves["t"].values
+    ax.fill_between(t, curves["exp_ci95_lower"].values, curves["exp_ci95_upper"].values,
+                    color="0.75", label="experiment 95 % CI")
+    ax.plot(t, curves["exp_mean"].values, color="k", lw=1.0, label="experiment mean")
+    for i, run in enumerate(curves["run"].values):
+        ax.plot(t, curves["heave_over_H0"].sel(run=run).values, color=f"C{i}", lw=1.1,
+                label=str(run))
+    ax.set_xlim(-0.2, 5.0)
+    ax.set_xlabel("t / Te0 [-]  (Te0 = 0.7561 s)")
+    ax.set_ylabel("heave / H0 [-]")
+    ax.set_title("SPH heave decay of the Kramer sphere, H0 = 0.1D", fontsize=10)
+    ax.axhline(0.0, color="0.5", lw=0.5)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    return fig

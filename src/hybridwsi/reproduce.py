@@ -312,7 +312,8 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
         from hybridwsi.sph.run import run_case
 
         cfg = load_case("paper_sphere")["sph_regular_waves"]  # the shipped run's set-up
-        case = tank.build("regular3d", dp=dp or cfg["dp"], depth=cfg["depth"], tf=cfg["tf"])
+        case = tank.build("regular3d", dp=dp or cfg["dp"], depth=cfg["depth"], tf=cfg["tf"],
+                          hdx=cfg.get("hdx"), smooth_body=cfg.get("smooth_body"))
         target = out / "histories" / SPH_HISTORY
         hist = run_case(case, target, resume=True, progress=progress, openmp=openmp)
         return _needs_force(hist, target), (

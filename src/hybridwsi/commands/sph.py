@@ -21,6 +21,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tf", type=float, default=None, help="final time [s]")
     parser.add_argument("--depth", type=float, default=None,
                         help="still-water depth [m] (cases with a depth; default the case's)")
+    parser.add_argument("--hdx", type=float, default=None,
+                        help="smoothing length over spacing h/dp (body and wave cases)")
+    parser.add_argument("--hold", type=float, default=None,
+                        help="decay cases: seconds the body is held before release "
+                             "(default 0.3; the history starts at the release)")
+    parser.add_argument("--sponge", type=float, default=None,
+                        help="decay cases: width [m] of an absorbing layer along the side "
+                             "walls (default 0: closed tank)")
+    parser.add_argument("--lattice-body", action="store_true",
+                        help="body cases: build the body from lattice points (staircase "
+                             "surface) instead of smooth concentric shells, for comparison")
     parser.add_argument("--out", default=None, help="output NetCDF (default sph_<case>.nc)")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")
@@ -39,11 +50,17 @@ def run(args: argparse.Namespace) -> int:
     from hybridwsi.sph import tank
     from hybridwsi.sph.run import run_case
 
-    for name in ("dp", "tf", "depth"):
+    for name in ("dp", "tf", "depth", "hdx"):
         v = getattr(args, name)
         if v is not None and not v > 0:
             raise InputError(f"--{name} must be positive, got {v}")
-    case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth)
+    if args.sponge is not None and not args.sponge >= 0:
+        raise InputError(f"--sponge must be a non-negative width in m, got {args.sponge}")
+    if args.hold is not None and not args.hold >= 0:
+        raise InputError(f"--hold must be a non-negative time in s, got {args.hold}")
+    case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth, hdx=args.hdx,
+                      t_release=args.hold, sponge=args.sponge,
+                      smooth_body=(False if args.lattice_body else None))
     out = args.out or f"sph_{args.case}.nc"
     print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} s, "
           f"tf = {case.tf} s -> {out}")

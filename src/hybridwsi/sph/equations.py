@@ -28,8 +28,8 @@ from hybridwsi.sph.wavemaker import piston_motion
 
 # indices into the wall constant ``body``
 B_Z, B_W, B_A, B_Z0, B_W0, B_FFLUID, B_FTOT, B_MASS, B_SCALE, B_FREE, B_AXIS, B_G, B_TRAMP, \
-    B_USE_ACC, B_FX, B_SYM = range(16)
-N_BODY = 16
+    B_USE_ACC, B_FX, B_SYM, B_TREL = range(17)
+N_BODY = 17
 # indices into the wall constant ``piston``: X, U, A, stroke, period, t_ramp
 P_X, P_U, P_A, P_STROKE, P_PERIOD, P_TRAMP = range(6)
 N_PISTON = 8
@@ -130,19 +130,27 @@ class DensityDiffusionFourtakas(Equation):
 
 
 class DampingZone(Equation):
-    """Velocity relaxation a -= sigma(x) v for x in [x0, x1] (absorbing beach).
+    """Velocity relaxation a -= sigma(s) v for s in [x0, x1] (absorbing beach or sponge).
 
-    sigma(x) = sigma_max ((x - x0)/(x1 - x0))^2 [1/s]; quadratic so waves enter without
-    reflecting off the zone's start.
+    sigma(s) = sigma_max ((s - x0)/(x1 - x0))^2 [1/s]; quadratic so waves enter without
+    reflecting off the zone's start. s is x (a beach at the flume's end) or, with ``radial``,
+    the distance to the nearest side wall of a tank centred on x = y = 0: max(|x|, |y|) in 3D,
+    |x| in 2D (a sponge all around a body radiating waves).
     """
 
-    def __init__(self, dest, sources, x0, x1, sigma_max):
+    def __init__(self, dest, sources, x0, x1, sigma_max, radial=0, dim=2):
         self.x0, self.x1, self.sigma_max = x0, x1, sigma_max
+        self.radial, self.dim = radial, dim
         super().__init__(dest, sources)
 
-    def post_loop(self, d_idx, d_x, d_u, d_v, d_w, d_au, d_av, d_aw):
-        if d_x[d_idx] > self.x0 and self.x1 > self.x0:
-            s = min((d_x[d_idx] - self.x0) / (self.x1 - self.x0), 1.0)
+    def post_loop(self, d_idx, d_x, d_y, d_u, d_v, d_w, d_au, d_av, d_aw):
+        xs = d_x[d_idx]
+        if self.radial == 1:
+            xs = abs(d_x[d_idx])
+            if self.dim == 3:
+                xs = max(xs, abs(d_y[d_idx]))
+        if xs > self.x0 and self.x1 > self.x0:
+            s = min((xs - self.x0) / (self.x1 - self.x0), 1.0)
             sig = self.sigma_max * s * s
             d_au[d_idx] -= sig * d_u[d_idx]
             d_av[d_idx] -= sig * d_v[d_idx]
@@ -205,6 +213,9 @@ class WallForce(Equation):
 class BodyForceReduce(Equation):
     """Sum the particle forces into the body's total force and acceleration (heave).
 
+    A free body is held at its initial position until ``body[B_TREL]`` [s], as in a decay
+    experiment the sphere is held while the water comes to rest.
+
     ``F_fluid`` and ``F_tot = F_fluid + m g`` are for the whole body (the simulated part times
     ``scale``, e.g. 4 with two symmetry planes), so that ``m z'' = F_tot``.
     """
@@ -227,7 +238,8 @@ class BodyForceReduce(Equation):
         b[5] = f_vert
         b[6] = f_vert - b[7] * b[11] * fac
         b[2] = 0.0
-        if b[9] > 0:
+        # a free body is held in place until its release time b[16] (the fluid settles)
+        if b[9] > 0 and t >= b[16]:
             b[2] = b[6] / b[7]
 
 

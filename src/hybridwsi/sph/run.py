@@ -47,6 +47,7 @@ def make_equations(case: SPHCase) -> list:
     gx, gy, gz = case.gvec
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
     x0, x1, sigma = case.damping
+    alpha_wall = case.alpha if case.alpha_wall is None else case.alpha_wall
     return [
         Group(equations=[TaitEOS("fluid", None, rho0=case.rho0, c0=case.c0, gamma=case.gamma)],
               real=False, name="eos"),
@@ -57,12 +58,15 @@ def make_equations(case: SPHCase) -> list:
             ContinuityEquation("fluid", ["fluid", "wall"]),
             DensityDiffusionFourtakas("fluid", ["fluid"], delta=case.delta, c0=case.c0,
                                       rho0=case.rho0, **grav),
-            MomentumEquation("fluid", ["fluid", "wall"], c0=case.c0, alpha=case.alpha,
-                             beta=0.0),
+            # two instances so that fluid-solid pairs can take their own viscosity (both
+            # zero the accelerations in ``initialize``, which PySPH runs before any loop)
+            MomentumEquation("fluid", ["fluid"], c0=case.c0, alpha=case.alpha, beta=0.0),
+            MomentumEquation("fluid", ["wall"], c0=case.c0, alpha=alpha_wall, beta=0.0),
             GravityRamp("fluid", None, **grav),
-            DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma),
+            DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma,
+                        radial=int(case.damping_radial), dim=case.dim),
             XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps),
-            WallForce("wall", ["fluid"], alpha=case.alpha),
+            WallForce("wall", ["fluid"], alpha=alpha_wall),
         ], name="rates"),
         Group(equations=[BodyForceReduce("wall", None)], name="body"),
     ]
@@ -122,6 +126,17 @@ def _arrays_to_rows(arrs: dict[str, np.ndarray]) -> list[dict[str, Any]]:
 def history_from_rows(case: SPHCase, rows: list[dict[str, Any]]) -> xr.Dataset:
     """Build the TimeHistory (z, zdot, zddot, F_tot, F_fluid, eta(time, probe), monitors)."""
     a = _rows_to_arrays(rows)
+    hold_force = None
+    if case.t_release > 0.0 and a:
+        # the hold phase is the set-up, not the record: keep its mean static force [N]
+        # (second half, after the start-up transient) and start the history at the release
+        t = a["time"]
+        late_hold = (t >= 0.5 * case.t_release) & (t < case.t_release - 1e-9)
+        if np.any(late_hold):
+            hold_force = float(np.mean(a["F_tot"][late_hold]))
+        keep = t >= case.t_release - 1e-9
+        a = {k: v[keep] for k, v in a.items()}
+        a["time"] = a["time"] - case.t_release
     if case.body_mass is None:
         # no floating body: the body constants hold placeholders, report zeros
         for k in ("z", "zdot", "zddot", "F_tot", "F_fluid"):
@@ -129,6 +144,7 @@ def history_from_rows(case: SPHCase, rows: list[dict[str, Any]]) -> xr.Dataset:
     import pysph
 
     inputs = dict(case.inputs, dt=case.dt, c0=case.c0, h=case.h, alpha=case.alpha,
+                  t_release_actual=case.t_release,
                   delta=case.delta, n_particles=case.n_particles, engine="PySPH",
                   engine_version=pysph.__version__)
     ds = make_history(a["time"], a["z"], a["zdot"], a["zddot"],
@@ -136,6 +152,11 @@ def history_from_rows(case: SPHCase, rows: list[dict[str, Any]]) -> xr.Dataset:
                       dof=["Heave"], mass=case.body_mass, source=f"hybridwsi.sph:{case.name}",
                       inputs=inputs, check=len(a["time"]) >= 8)
     ds["zddot"].attrs["note"] = "body acceleration at the last force evaluation (mid-step)"
+    if hold_force is not None:
+        ds["F_tot"].attrs["hold_mean"] = hold_force
+        ds["F_tot"].attrs["hold_note"] = (
+            "mean F_tot [N] over the second half of the hold before release; the exact "
+            "hydrostatic value is the restoring force at the release height")
     if case.body_mass is None:
         ds.attrs["note"] = "no floating body in this case: z, zdot, zddot, forces are zero"
     if case.probes:

@@ -36,6 +36,15 @@ KRAMER_DEPTH = 0.9
 # trough was -0.37 H0 instead of the measured -0.85 and the period looked 26 % long. delta-SPH
 # density diffusion keeps alpha = 0.005 stable (checked over 1.2 s at dp = D/8 and D/10).
 BODY_ALPHA = 0.005
+# h/dp of the floating-body cases. On a lattice the Wendland quintic's gradient moment
+# sum_j V_j (x_j - x_i) dW/dx_i is 0.979 at h/dp = 1.3 (3D; 0.974 in 2D), so the fluid settles
+# with a pressure ~2 % above hydrostatic and the body floats high; it is 1.0006 at 1.5. Measured
+# on the sphere's first decay cycle (D/10, depth 0.6 m): first trough -0.755 H0 at 1.3,
+# -0.803 at 1.5 (experiment -0.853).
+BODY_HDX = 1.5
+# Hold before release [s]: the lattice fluid around the body relaxes (acoustic period
+# 4 d / c0 ~ 0.1 s) while the body is held, as the experiment holds the sphere in still water.
+BODY_HOLD = 0.3
 
 
 @dataclass
@@ -55,15 +64,21 @@ class SPHCase:
     g: float = G
     hdx: float = 1.3
     alpha: float = 0.1
+    #: artificial viscosity between fluid and solid particles (None: ``alpha``)
+    alpha_wall: float | None = None
     delta: float = 0.1
     xsph_eps: float = 0.0
     cfl: float = 0.2
     t_ramp: float = 0.0
     damping: tuple[float, float, float] = (1e30, 2e30, 0.0)
+    #: damping zone measured from the side walls of a centred tank instead of along x
+    damping_radial: bool = False
     output_dt: float = 0.01
     probes: list[tuple[float, float]] = field(default_factory=list)
     monitors: dict[str, Callable[[Any, Any], float]] = field(default_factory=dict)
     body_mass: float | None = None
+    #: a free body is held until this time [s]; the history starts at the release (t = 0)
+    t_release: float = 0.0
     inputs: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -119,6 +134,38 @@ def _tank_walls(lo: list[float], hi: list[float], dp: float, nlayers: int,
             continue
         keep &= ~(pts[:, ax] > hi[ax]) if upper else ~(pts[:, ax] < lo[ax])
     return pts[keep]
+
+
+def round_shell(centre: np.ndarray, radius: float, dp: float, nlayers: int,
+                quarter: bool = False, half: bool = False) -> np.ndarray:
+    """Particles of a circle (2D) or sphere (3D) boundary: ``nlayers`` concentric layers at
+    radii R - (k + 1/2) dp, spaced about dp along each layer, so the body surface (half a
+    spacing outside the outer layer) is the true circle/sphere rather than a lattice staircase.
+
+    In 3D, ``quarter`` keeps x > 0 and y > 0 (symmetry planes x = 0 and y = 0), ``half`` keeps
+    y > 0; points are set half a spacing off those planes, like the lattice next to a wall.
+    """
+    dim = len(centre)
+    out = []
+    for k in range(nlayers):
+        rk = radius - (k + 0.5) * dp
+        if rk <= 0.25 * dp:
+            break
+        if dim == 2:
+            n = max(1, round(2.0 * math.pi * rk / dp))
+            phi = (np.arange(n) + 0.5) * 2.0 * math.pi / n
+            out.append(np.stack([rk * np.cos(phi), rk * np.sin(phi)], axis=1))
+            continue
+        # rings of constant polar angle; each ring spans the kept azimuth range
+        span = 0.5 * math.pi if quarter else (math.pi if half else 2.0 * math.pi)
+        nt = max(1, round(math.pi * rk / dp))
+        for th in (np.arange(nt) + 0.5) * math.pi / nt:
+            rho = rk * math.sin(th)
+            n = max(1, round(span * rho / dp))
+            phi = (np.arange(n) + 0.5) * span / n
+            out.append(np.stack([rho * np.cos(phi), rho * np.sin(phi),
+                                 np.full(n, rk * math.cos(th))], axis=1))
+    return np.vstack(out) + np.asarray(centre)[None, :]
 
 
 def _nlayers(hdx: float) -> int:
@@ -375,15 +422,37 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                length: float | None = None, x_body: float = 0.0,
                damping: tuple[float, float, float] = (1e30, 2e30, 0.0),
                probes: list[tuple[float, float]] | None = None,
-               alpha: float = BODY_ALPHA) -> SPHCase:
+               alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
+               hdx: float = BODY_HDX, t_release: float = 0.0,
+               smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
     """Half-submerged circle (2D) or sphere (3D, quarter domain with symmetry planes x = 0 and
     y = 0 unless a paddle is used, then only y = 0) released from z0 [m] above equilibrium.
 
-    ``alpha`` is the artificial-viscosity coefficient (see :data:`BODY_ALPHA`)."""
+    ``alpha`` is the artificial-viscosity coefficient (see :data:`BODY_ALPHA`), ``alpha_wall``
+    the one between fluid and solid particles (default ``alpha``), ``hdx`` = h/dp. The body is
+    held for ``t_release`` [s] before it is released (``tf`` counts from the release).
+    ``smooth_body`` builds the body from concentric particle shells (:func:`round_shell`)
+    instead of the lattice points inside it, whose staircase surface acts as roughness.
+    ``sponge`` [m] (decay cases) is the width of an absorbing layer along the side walls, so that
+    the waves the body radiates are not reflected back onto it."""
+    if not (math.isfinite(t_release) and t_release >= 0.0):
+        raise InputError(f"t_release must be a non-negative time in s, got {t_release!r}")
+    if not 1.0 <= hdx <= 2.0:
+        raise InputError(f"hdx = h/dp must be in [1, 2], got {hdx!r}")
     if not (math.isfinite(alpha) and 0.0 <= alpha <= 1.0):
         raise InputError(f"alpha must be in [0, 1], got {alpha!r}")
     _check_dp(dp, radius)
-    hdx, rho0 = 1.3, RHO_WATER
+    if not (math.isfinite(sponge) and 0.0 <= sponge <= half_width - radius - 4 * dp):
+        raise InputError(f"sponge must be between 0 and the clear width {half_width - radius:.3g}"
+                         f" m less 4 dp, got {sponge!r}")
+    if sponge > 0.0:
+        if piston is not None:
+            raise InputError("a sponge along the side walls is for decay cases (no paddle)")
+        # strength from the heave natural frequency sqrt(C / (m + A)), A ~ m (heave, half
+        # immersed): 3 omega relaxes a wave within the layer (as the flume's beach)
+        c_hyd = RHO_WATER * g * (2.0 * radius if dim == 2 else math.pi * radius ** 2)
+        damping = (half_width - sponge, half_width, 3.0 * math.sqrt(c_hyd / (2.0 * mass)))
+    rho0 = RHO_WATER
     c0 = _c0(g, depth, c0_factor)
     nl = _nlayers(hdx)
     v = dim - 1
@@ -407,7 +476,11 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     r = np.linalg.norm(pts_all - centre, axis=1)
     fl = pts_all[(r >= radius) & (pts_all[:, v] < depth)]
     # body: a shell nl particles thick (inner particles never see the fluid)
-    body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
+    if smooth_body:
+        body = round_shell(centre, radius, dp, nl, quarter=(dim == 3 and piston is None),
+                           half=(dim == 3 and piston is not None))
+    else:
+        body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
     wlo, whi = list(lo), list(hi)
     whi[-1] = top
     if piston is not None:
@@ -436,43 +509,63 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     (wall.yi, wall.zi)[v - 1][flags == 2] -= z0
     if piston is not None:
         wall.piston[3:6] = piston
-    case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
-                   body_mass=mass, damping=damping, probes=probes or [],
-                   output_dt=0.005, alpha=alpha)
+    case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
+                   hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
+                   output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall,
+                   damping_radial=sponge > 0.0)
+    if t_release > 0.0:
+        # release on an output sample; PEC evaluates forces at mid-step, so the body is free
+        # from the evaluation half a step before it and the first sample has m zddot = F_tot
+        every = max(1, round(case.output_dt / case.dt)) * case.dt
+        case.t_release = max(1, round(t_release / every)) * every
+        case.tf = tf + case.t_release
+        b[16] = case.t_release - 0.75 * case.dt
     return case
 
 
 def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_d: float = 0.1,
             half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
-            free: bool = True, alpha: float = BODY_ALPHA) -> SPHCase:
+            free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
+            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
+            smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
     case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
-                      half_width, tf, G, c0_factor, free, alpha=alpha)
+                      half_width, tf, G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall,
+                      hdx=hdx, t_release=t_release, smooth_body=smooth_body,
+                      sponge=sponge)
     case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
-                       "mass_per_length": mass, "alpha": alpha}
+                       "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
+                       "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
+                       "sponge": sponge}
     return case
 
 
 def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1.2,
             z0_over_d: float = 0.1, tf: float = 5 * 0.7561 + 0.05, c0_factor: float = 10.0,
-            free: bool = True, alpha: float = BODY_ALPHA) -> SPHCase:
+            free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
+            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
+            smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
     """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D) on a quarter
     domain with symmetry planes x = 0 and y = 0; walls at ``half_width`` [m]. The default
     ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS window."""
     case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
-                      alpha=alpha)
+                      alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release, smooth_body=smooth_body,
+                      sponge=sponge)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
-                       "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha}
+                       "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
+                       "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
+                       "sponge": sponge}
     return case
 
 
 def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.75,
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
-              c0_factor: float = 10.0, alpha: float = BODY_ALPHA) -> SPHCase:
+              c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
+              smooth_body: bool = True) -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
     narrow flume (half width, symmetry plane y = 0) with a piston and a damping zone."""
     g = KRAMER_G
@@ -485,10 +578,12 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                       tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
-                      probes=[(x_body - 0.5 * lam, 0.5 * half_width)], alpha=alpha)
+                      probes=[(x_body - 0.5 * lam, 0.5 * half_width)], alpha=alpha,
+                      hdx=hdx, smooth_body=smooth_body)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
-                       "wavelength": lam, "x_body": x_body, "alpha": alpha}
+                       "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
+                       "smooth_body": smooth_body}
     return case
 
 
