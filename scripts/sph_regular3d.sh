@@ -3,7 +3,7 @@
 # in a narrow flume (half width 0.45 m, symmetry plane y = 0) with a Biésel piston and a damping
 # zone. Depth 0.45 m: kh = 3.2, deep water for this wave, half the particles of the 0.9 m tank.
 # The history shipped as src/hybridwsi/data/sph_regular_waves.nc (Table 1's SPH column) was
-# made with the defaults below: dp = D/8, 32 125 particles, 12 936 steps, about 26 min on
+# made with the defaults below: dp = D/8, 32 127 particles, 11 211 steps, about 14 min on
 # 2 cores (OpenMP) here. Resumable: re-run the same command after an interruption.
 #   DP=0.03 sh scripts/sph_regular3d.sh      # finer: about 2.5x the cost
 set -e
