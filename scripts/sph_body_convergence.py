@@ -23,6 +23,7 @@ import math
 import time
 from pathlib import Path
 
+from hybridwsi.bodies import cap_volume
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import tank
 from hybridwsi.sph.decay import compare_decay, first_extrema
@@ -37,9 +38,7 @@ def exact_hold_force(dim: int, g: float) -> float:
     if dim == 2:
         a_seg = R * R * math.acos(Z0 / R) - Z0 * math.sqrt(R * R - Z0 * Z0)
         return -tank.RHO_WATER * g * (math.pi * R * R / 2 - a_seg)
-    h = R - Z0
-    v_cap = math.pi * h * h * (3 * R - h) / 3
-    return -tank.RHO_WATER * g * (2 / 3 * math.pi * R ** 3 - v_cap)
+    return -tank.RHO_WATER * g * (cap_volume(R, R) - cap_volume(R - Z0, R))
 
 
 def run_one(dim: int, dp: float, smooth: bool, hdx: float) -> dict:

@@ -54,9 +54,9 @@ def equilibrium_shift(z0: float, radius: float, tank_area: float) -> float:
     if not (0.0 <= z0 < radius) or tank_area <= math.pi * radius ** 2:
         raise InputError(f"need 0 <= z0 < R and a tank wider than the sphere (z0 = {z0}, "
                          f"R = {radius}, area = {tank_area})")
-    h = radius - z0
-    v_release = math.pi * h * h * (3.0 * radius - h) / 3.0
-    dv = 2.0 / 3.0 * math.pi * radius ** 3 - v_release
+    from hybridwsi.bodies import cap_volume
+
+    dv = cap_volume(radius, radius) - cap_volume(radius - z0, radius)
     return dv / (tank_area - math.pi * radius ** 2)
 
 

@@ -384,8 +384,7 @@ def waves2d(dp: float = 0.02, depth: float = 0.4, period: float = 1.0, height: f
     _check_dp(dp, depth)
     if height / dp < 1.0:
         raise InputError(f"wave height {height} m is below one particle spacing dp = {dp} m")
-    if not 1.0 <= hdx <= 2.0:
-        raise InputError(f"hdx = h/dp must be in [1, 2] (2.5 was unstable), got {hdx!r}")
+    _check_hdx(hdx)
     rho0, g = 1000.0, G
     k = wavemaker.wavenumber(period, depth, g)
     lam = 2 * math.pi / k
@@ -437,8 +436,7 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     the waves the body radiates are not reflected back onto it."""
     if not (math.isfinite(t_release) and t_release >= 0.0):
         raise InputError(f"t_release must be a non-negative time in s, got {t_release!r}")
-    if not 1.0 <= hdx <= 2.0:
-        raise InputError(f"hdx = h/dp must be in [1, 2], got {hdx!r}")
+    _check_hdx(hdx)
     if not (math.isfinite(alpha) and 0.0 <= alpha <= 1.0):
         raise InputError(f"alpha must be in [0, 1], got {alpha!r}")
     _check_dp(dp, radius)
@@ -552,13 +550,13 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
     ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS window."""
     case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
-                      alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release, smooth_body=smooth_body,
-                      sponge=sponge)
+                      alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release,
+                      smooth_body=smooth_body, sponge=sponge)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
-                       "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
-                       "sponge": sponge}
+                       "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
+                       "smooth_body": smooth_body, "sponge": sponge}
     return case
 
 
@@ -585,6 +583,11 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body}
     return case
+
+
+def _check_hdx(hdx: float) -> None:
+    if not (isinstance(hdx, (int, float)) and 1.0 <= hdx <= 2.0):
+        raise InputError(f"hdx = h/dp must be in [1, 2] (2.5 was unstable), got {hdx!r}")
 
 
 def _check_dp(dp: float, size: float) -> None:
