@@ -107,7 +107,7 @@ def test_case_file_rebuilds_the_shipped_sph_history_set_up():
     with xr.open_dataset(files("hybridwsi.data") / "sph_regular_waves.nc") as ds:
         rec = json.loads(ds.attrs["inputs"])
     cfg = load_case("paper_sphere")["sph_regular_waves"]
-    case = tank.build("regular3d", dp=cfg["dp"], depth=cfg["depth"], tf=cfg["tf"],
-                      hdx=cfg.get("hdx"), smooth_body=cfg.get("smooth_body"))
+    case = tank.build("regular3d", **cfg)
     assert case.n_particles == rec["n_particles"]
     assert case.h == pytest.approx(rec["h"]) and case.dt == pytest.approx(rec["dt"])
+    assert case.inputs["stroke"] == pytest.approx(rec["stroke"])  # the calibrated gain too

@@ -68,6 +68,41 @@ def test_zero_upcrossing_on_known_sine():
     assert n >= 10
 
 
+def test_group_velocity_limits_and_energy_flux_derivative():
+    g = 9.81
+    # deep water: c_g = g T / (4 pi); shallow: sqrt(g d)
+    assert wm.group_velocity(0.75, 50.0, g) == pytest.approx(g * 0.75 / (4 * math.pi), rel=1e-6)
+    assert wm.group_velocity(60.0, 0.2, g) == pytest.approx(math.sqrt(g * 0.2), rel=1e-3)
+    # independent definition: c_g = d omega / d k from the dispersion relation
+    d, T = 0.45, 0.75
+    k = wm.wavenumber(T, d, g)
+    omega = lambda kk: math.sqrt(g * kk * math.tanh(kk * d))  # noqa: E731
+    dk = 1e-6 * k
+    assert wm.group_velocity(T, d, g) == pytest.approx((omega(k + dk) - omega(k - dk)) / (2 * dk),
+                                                       rel=1e-6)
+
+
+def test_probe_waves_skips_the_transient_before_the_ramped_train_arrives():
+    # a wave train whose front reaches each probe at x / c_g: before it, a larger transient
+    # that the analysis must leave out
+    T, d, t_ramp = 0.75, 0.45, 1.5
+    cg = wm.group_velocity(T, d)
+    t = np.arange(0.0, 12.0, 0.005)
+    xs = np.array([0.9, 1.8])
+    eta = np.zeros((t.size, 2))
+    for i, x in enumerate(xs):
+        arrive = t_ramp + x / cg
+        eta[:, i] = np.where(t < arrive, 0.05 * np.sin(2 * np.pi * t / 1.1),
+                             (0.01 * (i + 1)) * np.sin(2 * np.pi * t / T))
+    res = wm.probe_waves(t, eta, xs, T, d, t_ramp)
+    for i, r in enumerate(res):
+        assert r["t_start"] == pytest.approx(t_ramp + xs[i] / cg + T)
+        assert r["H"] == pytest.approx(0.02 * (i + 1), rel=2e-3)
+        assert r["T"] == pytest.approx(T, rel=2e-3)
+    with pytest.raises(InputError, match="probes"):
+        wm.probe_waves(t, eta[:, :1], xs, T, d, t_ramp)
+
+
 @pytest.mark.parametrize("bad", [{"period": -1, "depth": 1}, {"period": 1, "depth": 0},
                                  {"period": float("nan"), "depth": 1}])
 def test_bad_input_raises_input_error(bad):

@@ -312,8 +312,7 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
         from hybridwsi.sph.run import run_case
 
         cfg = load_case("paper_sphere")["sph_regular_waves"]  # the shipped run's set-up
-        case = tank.build("regular3d", dp=dp or cfg["dp"], depth=cfg["depth"], tf=cfg["tf"],
-                          hdx=cfg.get("hdx"), smooth_body=cfg.get("smooth_body"))
+        case = tank.build("regular3d", **{**cfg, "dp": dp or cfg["dp"]})
         target = out / "histories" / SPH_HISTORY
         hist = run_case(case, target, resume=True, progress=progress, openmp=openmp)
         return _needs_force(hist, target), (
@@ -337,8 +336,9 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
 
 
 def _wave_note(hist: xr.Dataset) -> str:
-    """The incident wave height measured at the history's probe against its target, so a
-    coarse run's wave loss is stated next to the numbers it produced."""
+    """The wave height measured at the history's first probe against its target, so a
+    coarse run's wave loss (or its paddle calibration) is stated next to the numbers it
+    produced."""
     try:
         inputs = json.loads(hist.attrs.get("inputs", "{}"))
         period, height = float(inputs["period"]), float(inputs["height"])
@@ -350,10 +350,17 @@ def _wave_note(hist: xr.Dataset) -> str:
     eta = np.asarray(hist["eta"].values).reshape(t.size, -1)[:, 0]
     last = t >= t[-1] - 2 * period
     measured = float(np.nanmax(eta[last]) - np.nanmin(eta[last]))
-    return (f" Wave height at the probe over the last two periods: {measured:.3f} m against "
-            f"the target {height:g} m ({measured / height - 1:+.0%}); Table 1's splits are "
-            "Newton identities for any history whose F_tot is the body's m z̈, the wave "
-            "only sets the motion they are fitted on.")
+    where = ""
+    if "probe_x" in hist.coords and "x_body" in inputs:
+        dx = float(inputs["x_body"]) - float(hist["probe_x"].values[0])
+        where = f" ({dx:.2f} m upstream of the body)"
+    gain = float(inputs.get("gain", 1.0))
+    calib = (f" The paddle stroke is {gain:.3g} x Biésel's, calibrated in the empty flume for "
+             "the target height at the body (docs/SPH_RUNS.md)." if gain != 1.0 else "")
+    return (f" Wave height at the probe{where} over the last two periods: {measured:.3f} m "
+            f"against the target {height:g} m ({measured / height - 1:+.0%}).{calib} Table 1's "
+            "splits are Newton identities for any history whose F_tot is the body's m z̈, the "
+            "wave only sets the motion they are fitted on.")
 
 
 def _needs_force(hist: xr.Dataset, src: Path) -> xr.Dataset:

@@ -6,13 +6,14 @@ import argparse
 
 from hybridwsi.errors import InputError
 
-HELP = "run an SPH wave-tank case (PySPH): hydrostatic, dam_break, waves2d, decay3d, regular3d"
+HELP = ("run an SPH wave-tank case (PySPH): hydrostatic, dam_break, waves2d, waves3d, decay3d, "
+        "regular3d")
 DESCRIPTION = (
     "Run an SPH case with PySPH (optional extra hybridwsi[sph]) and write its TimeHistory "
     "(z, zdot, zddot, F_tot, probe elevations eta) to NetCDF. Checkpoints are written next to "
     "the output; --resume continues an interrupted run to the same result."
 )
-CASES = ("hydrostatic", "dam_break", "waves2d", "decay2d", "decay3d", "regular3d")
+CASES = ("hydrostatic", "dam_break", "waves2d", "waves3d", "decay2d", "decay3d", "regular3d")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -29,6 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sponge", type=float, default=None,
                         help="decay cases: width [m] of an absorbing layer along the side "
                              "walls (default 0: closed tank)")
+    parser.add_argument("--gain", type=float, default=None,
+                        help="waves3d, regular3d: factor on the Biésel paddle stroke, from a "
+                             "calibration in the empty flume (scripts/sph_wave_calibration.py)")
     parser.add_argument("--lattice-body", action="store_true",
                         help="body cases: build the body from lattice points (staircase "
                              "surface) instead of smooth concentric shells, for comparison")
@@ -59,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     if args.hold is not None and not args.hold >= 0:
         raise InputError(f"--hold must be a non-negative time in s, got {args.hold}")
     case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth, hdx=args.hdx,
-                      t_release=args.hold, sponge=args.sponge,
+                      t_release=args.hold, sponge=args.sponge, gain=args.gain,
                       smooth_body=(False if args.lattice_body else None))
     out = args.out or f"sph_{args.case}.nc"
     print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} s, "

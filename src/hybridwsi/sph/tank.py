@@ -23,7 +23,7 @@ from hybridwsi.sph import wavemaker
 
 RHO_WATER = 998.2
 G = 9.81
-CASES = ("hydrostatic", "dam_break", "waves2d", "decay3d", "regular3d", "decay2d")
+CASES = ("hydrostatic", "dam_break", "waves2d", "waves3d", "decay3d", "regular3d", "decay2d")
 
 # Kramer et al. (2021) sphere (see /work/shared/data/kramer2021_sphere_decay/README.md)
 SPHERE_D = 0.300
@@ -380,38 +380,81 @@ def waves2d(dp: float = 0.02, depth: float = 0.4, period: float = 1.0, height: f
     H error at 3 depths from the paddle (T = 1 s, H = 0.05 m, d = 0.4 m, dp = 0.02 m):
     hdx 1.3, alpha 0.02: -20 % (still -19 % at dp = 0.0125 m); hdx 2, alpha 0.02: -12 %;
     hdx 2, alpha 0.005: -3 % (-6 % at one wavelength). hdx = 2.5 went unstable, alpha = 0 too.
+    At H/dp below 2 the optimum moves to hdx = 1.5 (see ``docs/SPH_RUNS.md``).
     """
+    return _flume("waves2d", 2, dp, depth, period, height, length, 0.0, tf, t_ramp, c0_factor,
+                  probes, alpha, hdx, G)
+
+
+def waves3d(dp: float = 0.0375, depth: float = 0.45, period: float = 0.75,
+            height: float = 0.05, length: float | None = None, half_width: float = 0.45,
+            tf: float = 6.0, t_ramp: float | None = None, c0_factor: float = 10.0,
+            probes: tuple[float, ...] | None = None, alpha: float = BODY_ALPHA,
+            hdx: float = BODY_HDX, alpha_wall: float | None = None,
+            gain: float = 1.0) -> SPHCase:
+    """3D piston wave flume without a body: :func:`regular3d`'s tank (half width with the
+    symmetry plane y = 0, damping zone over the last wavelength), to measure or calibrate
+    the wave that reaches the body. Probes halfway between the symmetry plane and the side
+    wall, by default at 1, 1.5 and 2 wavelengths (the body of :func:`regular3d` is at 2).
+    ``alpha_wall`` is the artificial viscosity between fluid and walls (default ``alpha``);
+    ``gain`` multiplies the Biésel stroke. Lengths in m, times in s.
+    """
+    k = wavemaker.wavenumber(period, depth, KRAMER_G)
+    lam = 2 * math.pi / k
+    return _flume("waves3d", 3, dp, depth, period, height,
+                  4.0 * lam if length is None else length, half_width, tf, t_ramp, c0_factor,
+                  (lam, 1.5 * lam, 2.0 * lam) if probes is None else probes, alpha, hdx,
+                  KRAMER_G, alpha_wall=alpha_wall, gain=gain)
+
+
+def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: float,
+           length: float | None, half_width: float, tf: float, t_ramp: float | None,
+           c0_factor: float, probes: tuple[float, ...] | None, alpha: float, hdx: float,
+           g: float, alpha_wall: float | None = None, gain: float = 1.0) -> SPHCase:
+    """Piston flume, 2D or 3D (y in [0, half_width]), damping zone over the last wavelength."""
     _check_dp(dp, depth)
     if height / dp < 1.0:
         raise InputError(f"wave height {height} m is below one particle spacing dp = {dp} m")
     _check_hdx(hdx)
-    rho0, g = 1000.0, G
+    if not (math.isfinite(gain) and 0.0 < gain <= 3.0):
+        raise InputError(f"gain (stroke factor) must be in (0, 3], got {gain!r}")
+    if dim == 3:
+        _check_dp(dp, half_width)
+    rho0 = 1000.0
     k = wavemaker.wavenumber(period, depth, g)
     lam = 2 * math.pi / k
-    stroke = wavemaker.piston_stroke(height, period, depth, g)
+    stroke = gain * wavemaker.piston_stroke(height, period, depth, g)
     L = length if length is not None else 3.0 * lam
     c0 = _c0(g, depth, c0_factor)
     nl = _nlayers(hdx)
-    fl = _grid([0.0, 0.0], [L, depth], dp)
+    top = depth + 2 * height + 4 * dp
+    mid = [0.0, half_width] if dim == 3 else []
+    fl = _grid([0.0] + mid[:1] + [0.0], [L] + mid[1:] + [depth], dp)
     # bottom extends under the paddle's travel; the x-min wall (the paddle) is built apart
     margin = 0.5 * stroke + 2 * dp
-    wl = _tank_walls([-margin, 0.0], [L, depth + 2 * height + 4 * dp], dp, nl, open_sides=(0,))
+    wl = _tank_walls([-margin] + mid[:1] + [0.0], [L] + mid[1:] + [top], dp, nl,
+                     open_sides=(0,))
     wl = wl[wl[:, 0] > -margin]  # drop the unused x-min corner
-    paddle = _grid([-nl * dp, 0.0], [0.0, depth + 2 * height + 4 * dp], dp)
+    paddle = _grid([-nl * dp] + mid[:1] + [0.0], [0.0] + mid[1:] + [top], dp)
     pts = np.vstack([wl, paddle])
     flags = np.r_[np.zeros(len(wl)), np.ones(len(paddle))]
-    fluid, wall = _arrays(2, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
+    fluid, wall = _arrays(dim, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
                           hydrostatic=True)
     wall.piston[3:6] = stroke, period, (2.0 * period if t_ramp is None else t_ramp)
     omega = 2 * math.pi / period
     x_probes = probes if probes is not None else (2.0 * depth, 3.0 * depth, lam)
-    case = SPHCase("waves2d", 2, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
-                   alpha=alpha, damping=(L - lam, L, 3.0 * omega), output_dt=min(0.01, period / 40),
-                   probes=[(float(x), 0.0) for x in x_probes])
-    case.inputs = {"case": "waves2d", "dp": dp, "depth": depth, "period": period, "height": height,
-                       "length": L, "tf": tf, "t_ramp": float(wall.piston[5]), "c0_factor": c0_factor,
-                       "stroke": stroke, "wavelength": lam, "probes": list(map(float, x_probes)),
-                       "alpha": alpha, "hdx": hdx}
+    # 3D: halfway to the side wall (the probe's fluid fraction sees no wall there)
+    y_probe = 0.5 * half_width if dim == 3 else 0.0
+    case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
+                   alpha=alpha, alpha_wall=alpha_wall, damping=(L - lam, L, 3.0 * omega),
+                   output_dt=min(0.01, period / 40),
+                   probes=[(float(x), y_probe) for x in x_probes])
+    case.inputs = {"case": name, "dp": dp, "depth": depth, "period": period, "height": height,
+                   "length": L, "tf": tf, "t_ramp": float(wall.piston[5]), "c0_factor": c0_factor,
+                   "stroke": stroke, "wavelength": lam, "probes": list(map(float, x_probes)),
+                   "alpha": alpha, "hdx": hdx}
+    if dim == 3:
+        case.inputs.update(half_width=half_width, g=g, alpha_wall=alpha_wall, gain=gain)
     return case
 
 
@@ -563,25 +606,34 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
 def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.75,
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
-              smooth_body: bool = True) -> SPHCase:
+              smooth_body: bool = True, gain: float = 1.0) -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
-    narrow flume (half width, symmetry plane y = 0) with a piston and a damping zone."""
+    narrow flume (half width, symmetry plane y = 0) with a piston and a damping zone.
+
+    The body is two wavelengths from the paddle. ``gain`` multiplies the Biésel stroke: at
+    coarse spacing the wave loses height on its way (numerical damping), so, as in a
+    laboratory, the stroke is calibrated in the empty flume (:func:`waves3d`,
+    ``scripts/sph_wave_calibration.py``) to give the target height at the body. Probes:
+    one wavelength upstream of the body on the centre plane, and half a wavelength upstream
+    halfway to the side wall."""
     g = KRAMER_G
+    if not (math.isfinite(gain) and 0.0 < gain <= 3.0):
+        raise InputError(f"gain (stroke factor) must be in (0, 3], got {gain!r}")
     k = wavemaker.wavenumber(period, depth, g)
     lam = 2 * math.pi / k
-    stroke = wavemaker.piston_stroke(height, period, depth, g)
+    stroke = gain * wavemaker.piston_stroke(height, period, depth, g)
     length = 4.0 * lam
     x_body = 2.0 * lam
+    probes = [(x_body - lam, 0.5 * dp), (x_body - 0.5 * lam, 0.5 * half_width)]
     case = _body_case("regular3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS, 0.0, half_width,
                       tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
-                      probes=[(x_body - 0.5 * lam, 0.5 * half_width)], alpha=alpha,
-                      hdx=hdx, smooth_body=smooth_body)
+                      probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
-                       "smooth_body": smooth_body}
+                       "smooth_body": smooth_body, "gain": gain}
     return case
 
 
@@ -602,6 +654,7 @@ BUILDERS: dict[str, Callable[..., SPHCase]] = {
     "hydrostatic": hydrostatic,
     "dam_break": dam_break,
     "waves2d": waves2d,
+    "waves3d": waves3d,
     "decay2d": decay2d,
     "decay3d": decay3d,
     "regular3d": regular3d,

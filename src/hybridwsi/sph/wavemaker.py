@@ -122,3 +122,48 @@ def zero_upcrossing(t: np.ndarray, eta: np.ndarray, t_start: float = 0.0,
     tc = t[up] - e[up] * (t[up + 1] - t[up]) / (e[up + 1] - e[up])
     heights = [e[i0:i1 + 1].max() - e[i0:i1 + 1].min() for i0, i1 in itertools.pairwise(up)]
     return float(np.mean(heights)), float(np.mean(np.diff(tc))), len(heights)
+
+
+def group_velocity(period: float, depth: float, g: float = G) -> float:
+    """Linear group velocity c_g [m/s] of waves of ``period`` [s] in water of ``depth`` [m]."""
+    k = wavenumber(period, depth, g)
+    kd2 = 2.0 * k * depth
+    ratio = kd2 / math.sinh(kd2) if kd2 < 100.0 else 0.0  # (< 1e-41; sinh overflows later)
+    return 0.5 * (1.0 + ratio) * (2.0 * math.pi / period) / k
+
+
+def probe_waves(time: np.ndarray, eta: np.ndarray, probe_x: np.ndarray, period: float,
+                depth: float, t_ramp: float, g: float = G) -> list[dict[str, float]]:
+    """Mean height and period at each probe of a flume record, once steady.
+
+    Each probe's window starts when the end of the paddle's ramp-up has travelled to it at
+    the group velocity, plus one period; the rest of the record is analysed by
+    :func:`zero_upcrossing`.
+
+    Parameters
+    ----------
+    time : array (n,)
+        Sample times [s].
+    eta : array (n, n_probes)
+        Free-surface elevation at the probes [m].
+    probe_x : array (n_probes,)
+        Probe distances from the paddle's mean position [m].
+    period, depth, t_ramp : float
+        Paddle period [s], still-water depth [m] and ramp-up duration [s].
+
+    Returns
+    -------
+    list of dict with ``x`` [m], ``t_start`` [s], ``H`` [m], ``T`` [s] and ``n_waves``.
+    """
+    eta = np.asarray(eta, dtype=float)
+    probe_x = np.atleast_1d(np.asarray(probe_x, dtype=float))
+    if eta.ndim != 2 or eta.shape[1] != len(probe_x):
+        raise InputError(f"eta must be (time, probe) with {len(probe_x)} probes, "
+                         f"got shape {eta.shape}")
+    cg = group_velocity(period, depth, g)
+    out = []
+    for i, x in enumerate(probe_x):
+        t0 = t_ramp + x / cg + period
+        H, T, n = zero_upcrossing(time, eta[:, i], t_start=t0)
+        out.append({"x": float(x), "t_start": t0, "H": H, "T": T, "n_waves": n})
+    return out
