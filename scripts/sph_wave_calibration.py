@@ -40,11 +40,8 @@ def flume(dim: int, dp: float, hdx: float, alpha: float, tf: float, gain: float)
     if dim == 3:
         return tank.waves3d(dp=dp, depth=d, period=T, height=H, tf=tf, hdx=hdx, alpha=alpha,
                             probes=probes, gain=gain)
-    # 2D: waves2d has no gain argument of its own; scale the Biésel height instead (linear)
-    case = tank.waves2d(dp=dp, depth=d, period=T, height=H * gain, length=4 * lam, tf=tf,
-                        probes=probes, alpha=alpha, hdx=hdx)
-    case.inputs["gain"], case.inputs["height"] = gain, H
-    return case
+    return tank.waves2d(dp=dp, depth=d, period=T, height=H, length=4 * lam, tf=tf,
+                        probes=probes, alpha=alpha, hdx=hdx, gain=gain)
 
 
 def measure(dim: int, dp: float, hdx: float, alpha: float, tf: float, gain: float,

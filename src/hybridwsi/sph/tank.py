@@ -367,7 +367,7 @@ def dam_break(dp: float = 0.0125, a: float = 0.25, tf: float = 0.5,
 def waves2d(dp: float = 0.02, depth: float = 0.4, period: float = 1.0, height: float = 0.03,
             length: float | None = None, tf: float = 10.0, t_ramp: float | None = None,
             c0_factor: float = 10.0, probes: tuple[float, ...] | None = None,
-            alpha: float = 0.005, hdx: float = 2.0) -> SPHCase:
+            alpha: float = 0.005, hdx: float = 2.0, gain: float = 1.0) -> SPHCase:
     """2D piston wave flume with a damping zone of one wavelength at the far end.
 
     Paddle stroke from the Biésel transfer function; probes default to 2 and 3 depths and one
@@ -380,10 +380,11 @@ def waves2d(dp: float = 0.02, depth: float = 0.4, period: float = 1.0, height: f
     H error at 3 depths from the paddle (T = 1 s, H = 0.05 m, d = 0.4 m, dp = 0.02 m):
     hdx 1.3, alpha 0.02: -20 % (still -19 % at dp = 0.0125 m); hdx 2, alpha 0.02: -12 %;
     hdx 2, alpha 0.005: -3 % (-6 % at one wavelength). hdx = 2.5 went unstable, alpha = 0 too.
-    At H/dp below 2 the optimum moves to hdx = 1.5 (see ``docs/SPH_RUNS.md``).
+    At H/dp below 2 the optimum moves to hdx = 1.5 (see ``docs/SPH_RUNS.md``). ``gain``
+    multiplies the Biésel stroke (paddle calibration).
     """
     return _flume("waves2d", 2, dp, depth, period, height, length, 0.0, tf, t_ramp, c0_factor,
-                  probes, alpha, hdx, G)
+                  probes, alpha, hdx, G, gain=gain)
 
 
 def waves3d(dp: float = 0.0375, depth: float = 0.45, period: float = 0.75,
@@ -453,6 +454,8 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
                    "length": L, "tf": tf, "t_ramp": float(wall.piston[5]), "c0_factor": c0_factor,
                    "stroke": stroke, "wavelength": lam, "probes": list(map(float, x_probes)),
                    "alpha": alpha, "hdx": hdx}
+    if gain != 1.0:
+        case.inputs["gain"] = gain
     if dim == 3:
         case.inputs.update(half_width=half_width, g=g, alpha_wall=alpha_wall, gain=gain)
     return case
