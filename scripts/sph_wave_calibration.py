@@ -74,6 +74,8 @@ def main() -> None:
     ap.add_argument("--openmp", action="store_true")
     ap.add_argument("--out", default="results/sph_calibration")
     a = ap.parse_args()
+    if a.iterations < 0:
+        ap.error(f"--iterations must be 0 or more, got {a.iterations}")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     log = out / "calibration.json"

@@ -417,8 +417,7 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
     if height / dp < 1.0:
         raise InputError(f"wave height {height} m is below one particle spacing dp = {dp} m")
     _check_hdx(hdx)
-    if not (math.isfinite(gain) and 0.0 < gain <= 3.0):
-        raise InputError(f"gain (stroke factor) must be in (0, 3], got {gain!r}")
+    _check_gain(gain)
     if dim == 3:
         _check_dp(dp, half_width)
     rho0 = 1000.0
@@ -620,8 +619,7 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
     one wavelength upstream of the body on the centre plane, and half a wavelength upstream
     halfway to the side wall."""
     g = KRAMER_G
-    if not (math.isfinite(gain) and 0.0 < gain <= 3.0):
-        raise InputError(f"gain (stroke factor) must be in (0, 3], got {gain!r}")
+    _check_gain(gain)
     k = wavemaker.wavenumber(period, depth, g)
     lam = 2 * math.pi / k
     stroke = gain * wavemaker.piston_stroke(height, period, depth, g)
@@ -638,6 +636,11 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body, "gain": gain}
     return case
+
+
+def _check_gain(gain: float) -> None:
+    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and 0.0 < gain <= 3.0):
+        raise InputError(f"gain (stroke factor) must be in (0, 3], got {gain!r}")
 
 
 def _check_hdx(hdx: float) -> None:
