@@ -7,10 +7,11 @@ import pytest
 import xarray as xr
 
 import synthetic_hydro as sh
-from hybridwsi.diagnostic.components import KnownComponent
+from hybridwsi.forces import KnownComponent
 from hybridwsi.errors import InputError
 from hybridwsi.history import make_history
-from hybridwsi.hydro.statespace import RadiationMemory, RadiationSS, fit_radiation_ss
+from hybridwsi.forces import RadiationMemory
+from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 
 DOF = ["Heave"]
 

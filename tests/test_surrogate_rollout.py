@@ -10,7 +10,7 @@ torch = pytest.importorskip("torch")
 import synthetic_hydro as sh
 
 from hybridwsi.diagnostic import stability
-from hybridwsi.diagnostic.components import Hydrostatic
+from hybridwsi.forces import Hydrostatic
 from hybridwsi.history import make_history
 from hybridwsi.surrogate.demo import (
     drift,

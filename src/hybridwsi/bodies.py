@@ -22,24 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from hybridwsi.dofs import RIGID_DOFS, check_dofs
 from hybridwsi.errors import InputError
-
-#: Capytaine's rigid-body degree-of-freedom names, in its order
-RIGID_DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
-
-
-def check_dofs(dofs: Sequence[str]) -> tuple[str, ...]:
-    """Validate degree-of-freedom names (Capytaine spelling) and return them as a tuple."""
-    if isinstance(dofs, str):
-        dofs = (dofs,)
-    dofs = tuple(dofs)
-    bad = [d for d in dofs if d not in RIGID_DOFS]
-    if bad or not dofs:
-        raise InputError(f"unknown degree(s) of freedom {bad or '[]'}; choose from {list(RIGID_DOFS)}")
-    if len(set(dofs)) != len(dofs):
-        raise InputError(f"degrees of freedom are repeated: {list(dofs)}")
-    return dofs
-
 
 def cap_volume(depth: float | np.ndarray, radius: float) -> float | np.ndarray:
     """Volume [m^3] of a spherical cap of height ``depth`` [m] cut from a sphere of ``radius``."""

@@ -172,7 +172,7 @@ def build_system(
     irf_t_max: float | None = None,
 ) -> CumminsSystem:
     """Cummins matrices, and the radiation kernel or its state-space model, for ``dofs``."""
-    from hybridwsi.diagnostic.components import as_matrix
+    from hybridwsi.forces import as_matrix
 
     dofs = list(dofs)
     if radiation not in RADIATION:

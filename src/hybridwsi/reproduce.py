@@ -95,7 +95,7 @@ class Table1Case:
 
 def table1_partitions(coeffs: xr.Dataset) -> dict[str, list]:
     """The paper's three partitions, built from the BEM coefficients (C and A∞)."""
-    from hybridwsi.diagnostic.components import AddedMass, Hydrostatic
+    from hybridwsi.forces import AddedMass, Hydrostatic
 
     c = _scalar(coeffs["hydrostatic_stiffness"])
     a_inf = _scalar(coeffs["added_mass_inf"])

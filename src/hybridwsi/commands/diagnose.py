@@ -192,7 +192,7 @@ def _one_line(exc: BaseException) -> str:
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """Run the whole diagnosis: ``(JSON-ready dict, RegressionResult)``."""
     from hybridwsi import __version__
-    from hybridwsi.diagnostic.components import parse_known
+    from hybridwsi.forces import parse_known
     from hybridwsi.diagnostic.regression import regress
 
     notes: list[str] = []

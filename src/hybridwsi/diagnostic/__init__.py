@@ -7,10 +7,10 @@
   settings (:mod:`~hybridwsi.diagnostic.stability`), with the shared step function
   :func:`lagged_step` (:mod:`~hybridwsi.diagnostic.integrators`);
 - :func:`reconstruct` — paper Eq. 4 integration (:mod:`~hybridwsi.diagnostic.reconstruct`);
-- known components in :mod:`~hybridwsi.diagnostic.components`.
+- known components in :mod:`~hybridwsi.forces`.
 """
 
-from hybridwsi.diagnostic.components import (
+from hybridwsi.forces import (
     AddedMass,
     Hydrostatic,
     KnownComponent,

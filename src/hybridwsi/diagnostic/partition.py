@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from hybridwsi.diagnostic.components import (
+from hybridwsi.forces import (
     AddedMass,
     Hydrostatic,
     KnownComponent,
@@ -93,11 +93,8 @@ def _peak_omega(hist: xr.Dataset) -> float:
 
 
 def _memory(hist: xr.Dataset, coeffs: xr.Dataset | None) -> KnownComponent | None:
-    from hybridwsi.hydro.statespace import (
-        RadiationMemory,
-        RadiationSS,
-        fit_radiation_ss,
-    )
+    from hybridwsi.forces import RadiationMemory
+    from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 
     if "radiation_ss" in hist.attrs:
         return RadiationMemory(RadiationSS.from_dict(json.loads(hist.attrs["radiation_ss"])))

@@ -26,7 +26,7 @@ import scipy.integrate
 import scipy.interpolate
 import xarray as xr
 
-from hybridwsi.diagnostic.components import (
+from hybridwsi.forces import (
     KnownComponent,
     as_matrix,
     black_box_force,

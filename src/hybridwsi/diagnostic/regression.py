@@ -36,7 +36,7 @@ import scipy.optimize
 import scipy.signal
 import xarray as xr
 
-from hybridwsi.diagnostic.components import (
+from hybridwsi.forces import (
     KnownComponent,
     as_matrix,
     black_box_force,

@@ -1,7 +1,7 @@
 """Stability of a force partition in three settings (THEORY.md §4).
 
 The known part is written ``F_known = −A_k z̈ − B_k ż − C_k z`` (matrices n×n, from
-:func:`hybridwsi.diagnostic.components.summed_linear_coefficients`); ``m`` is the rigid-body mass.
+:func:`hybridwsi.forces.summed_linear_coefficients`); ``m`` is the rigid-body mass.
 
 a. :func:`prescribed_force_stability` — reconstruction with a prescribed ``F_bb(t)`` (paper
    Eq. 4): the error ``e = z − z_ref`` obeys ``(m + A_k) ë + B_k ė + C_k e = 0``.
@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from hybridwsi.diagnostic.components import KnownComponent, as_matrix, summed_linear_coefficients
+from hybridwsi.forces import KnownComponent, as_matrix, summed_linear_coefficients
 from hybridwsi.diagnostic.integrators import check_scheme, lagged_step
 from hybridwsi.errors import InputError
 

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.diagnostic.components import AddedMass, Hydrostatic, KnownComponent
+from hybridwsi.forces import AddedMass, Hydrostatic, KnownComponent
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.rollout import PrescribedForce, check_stability, rollout
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.diagnostic.components import KnownComponent, black_box_force
+from hybridwsi.forces import KnownComponent, black_box_force
 from hybridwsi.errors import InputError
 from hybridwsi.history import atomic_write
 from hybridwsi.surrogate.features import FeatureSpec, build_features, spec_for

@@ -5,7 +5,7 @@ For each case (a batch, evaluated in one torch call per network evaluation)::
     (m + A_k) z̈ = Σ_known F_i(t, z, ż, x) + F_prescribed(t) + F_net(features),
 
 where the known components (hydrostatics, damping, radiation memory states ``x``...) are
-:class:`~hybridwsi.diagnostic.components.KnownComponent` objects, ``A_k`` their
+:class:`~hybridwsi.forces.KnownComponent` objects, ``A_k`` their
 acceleration-proportional part moved to the left-hand side, and ``F_net`` the network.
 
 Time stepping: Newmark average acceleration (trapezoidal in z, ż, and in the internal states
@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.diagnostic.components import (
+from hybridwsi.forces import (
     AddedMass,
     Hydrostatic,
     KnownComponent,
@@ -125,7 +125,7 @@ class BatchedPhysics:
                 self.c_lin += c
             elif type(comp) is QuadraticDamping:
                 self.quad += np.diag(as_matrix(comp.value, n_dof, comp.name))
-            elif hasattr(comp, "ss") and comp.n_states:  # hydro.statespace.RadiationMemory
+            elif hasattr(comp, "ss") and comp.n_states:  # forces.RadiationMemory
                 sl = slice(n, n + comp.n_states)
                 self.ss.append((sl, comp.ss.A, comp.ss.B, comp.ss.C))
                 n += comp.n_states

@@ -1,4 +1,6 @@
-"""Known force components F_known(z, zdot, zddot), with their physical signs (THEORY.md §1).
+"""The force-component interface shared by every stage (docs/THEORY.md §1).
+
+Known force components F_known(z, zdot, zddot), with their physical signs.
 
 A component is removed from the total force with its physical sign,
 ``F_bb = F_tot - sum(F_known(z_ref, zdot_ref, zddot_ref))``; e.g. the hydrostatic restoring
@@ -14,8 +16,8 @@ The same objects enter the ODE of the reconstruction (paper Eq. 4) and the stabi
   state; ``x`` are the component's internal states (``n_states`` of them, e.g. a radiation
   state-space realisation), whose derivative is ``state_derivative(t, z, zdot, x)``.
 
-Subclass :class:`KnownComponent` for new physics (radiation memory in
-:mod:`hybridwsi.hydro.statespace`, quadratic drag, nonlinear hydrostatics...).
+Subclass :class:`KnownComponent` for new physics; the built-ins live beside this module
+(:mod:`hybridwsi.forces.linear`, :mod:`hybridwsi.forces.radiation`).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ def as_matrix(value: float | np.ndarray, n_dof: int, name: str) -> np.ndarray:
     raise InputError(f"{name} must be a scalar, a length-{n_dof} vector or a {n_dof}x{n_dof} matrix")
 
 
-def _kin(hist: xr.Dataset, name: str) -> np.ndarray:
+def kinematic(hist: xr.Dataset, name: str) -> np.ndarray:
     if name not in hist:
         raise InputError(f"history has no '{name}', needed to evaluate a known component")
     return np.asarray(hist[name].values, dtype=float)
@@ -78,114 +80,6 @@ class KnownComponent(ABC):
 
     def describe(self) -> str:
         return self.name
-
-
-class _LinearTerm(KnownComponent):
-    """``F = -coef * kinematic`` with a scalar/vector/matrix coefficient."""
-
-    kinematic: str = "z"
-    slot: int = 2  # index in (A, B, C)
-
-    def __init__(self, value: float | np.ndarray) -> None:
-        self.value = value
-
-    def _matrix(self, n_dof: int) -> np.ndarray:
-        return as_matrix(self.value, n_dof, self.name)
-
-    def force(self, hist: xr.Dataset) -> np.ndarray:
-        q = _kin(hist, self.kinematic)
-        return -q @ self._matrix(q.shape[1]).T
-
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        out = [np.zeros((n_dof, n_dof)) for _ in range(3)]
-        out[self.slot] = self._matrix(n_dof)
-        return out[0], out[1], out[2]
-
-    def describe(self) -> str:
-        return f"{self.name}={np.array2string(np.asarray(self.value), precision=6)}"
-
-
-class Hydrostatic(_LinearTerm):
-    """Linear hydrostatic restoring force ``F_hs = -C z`` (C [N/m])."""
-
-    name = "hydrostatic"
-    kinematic = "z"
-    slot = 2
-
-
-class AddedMass(_LinearTerm):
-    """Constant added-mass force ``F_A = -A zddot`` (A [kg]; e.g. A∞ from BEM)."""
-
-    name = "added_mass"
-    kinematic = "zddot"
-    slot = 0
-
-
-class LinearDamping(_LinearTerm):
-    """Linear damping force ``F_B = -B zdot`` (B [N s/m])."""
-
-    name = "damping"
-    kinematic = "zdot"
-    slot = 1
-
-
-class QuadraticDamping(KnownComponent):
-    """Quadratic (Morison-type) drag ``F_q = -Bq |zdot| zdot`` (Bq [N s²/m²], diagonal).
-
-    Its linearisation about a reference uses the mean of ``2 Bq |zdot_ref|``, set by
-    :meth:`linearise_on`; before that it counts as zero damping in the stability analysis.
-    """
-
-    name = "quadratic_damping"
-
-    def __init__(self, value: float | np.ndarray) -> None:
-        self.value = value
-        self._b_eq: np.ndarray | None = None
-
-    def _diag(self, n_dof: int) -> np.ndarray:
-        return np.diag(as_matrix(self.value, n_dof, self.name))
-
-    def force(self, hist: xr.Dataset) -> np.ndarray:
-        v = _kin(hist, "zdot")
-        return -self._diag(v.shape[1]) * np.abs(v) * v
-
-    def linearise_on(self, hist: xr.Dataset) -> QuadraticDamping:
-        v = _kin(hist, "zdot")
-        self._b_eq = np.diag(2.0 * self._diag(v.shape[1]) * np.abs(v).mean(axis=0))
-        return self
-
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        z = np.zeros((n_dof, n_dof))
-        return z, (self._b_eq if self._b_eq is not None else z.copy()), z.copy()
-
-    def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
-        return -self._diag(z.size) * np.abs(zdot) * zdot
-
-
-#: CLI names -> component classes (``--known hydrostatic=692.2``)
-REGISTRY: dict[str, type[KnownComponent]] = {
-    "hydrostatic": Hydrostatic,
-    "added_mass": AddedMass,
-    "damping": LinearDamping,
-    "quadratic_damping": QuadraticDamping,
-}
-
-
-def parse_known(spec: str) -> KnownComponent:
-    """Parse ``NAME=VALUE`` (VALUE a number, or comma-separated diagonal) into a component."""
-    if "=" not in spec:
-        raise InputError(f"--known expects NAME=VALUE, got '{spec}' (names: {', '.join(REGISTRY)})")
-    name, _, raw = spec.partition("=")
-    name = name.strip()
-    if name not in REGISTRY:
-        raise InputError(f"unknown known component '{name}' (choose from {', '.join(REGISTRY)})")
-    try:
-        vals = [float(v) for v in raw.split(",")]
-    except ValueError:
-        raise InputError(f"--known {name}: value '{raw}' is not a number") from None
-    if not all(np.isfinite(vals)):
-        raise InputError(f"--known {name}: value must be finite")
-    return REGISTRY[name](vals[0] if len(vals) == 1 else np.asarray(vals))
 
 
 def total_known_force(hist: xr.Dataset, known: list[KnownComponent]) -> np.ndarray:

@@ -1,0 +1,29 @@
+"""Force components: one interface (:class:`KnownComponent`) for every stage.
+
+Generators (Cummins), reconstruction, the diagnostic, component selection and the hybrid
+rollout all take the same objects. Sign convention and linearisation: docs/THEORY.md §1.
+"""
+
+from hybridwsi.forces.base import (
+    KnownComponent,
+    as_matrix,
+    black_box_force,
+    kinematic,
+    summed_linear_coefficients,
+    total_known_force,
+)
+from hybridwsi.forces.linear import (
+    REGISTRY,
+    AddedMass,
+    Hydrostatic,
+    LinearDamping,
+    QuadraticDamping,
+    parse_known,
+)
+from hybridwsi.forces.radiation import RadiationMemory
+
+__all__ = [
+    "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
+    "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
+    "QuadraticDamping", "parse_known", "RadiationMemory",
+]
