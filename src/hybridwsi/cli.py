@@ -27,6 +27,7 @@ COMMANDS: dict[str, str] = {
     "select": "select",
     "sweep": "sweep",
     "hybrid": "hybrid",
+    "coeffs": "coeffs",
 }
 
 

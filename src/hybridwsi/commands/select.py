@@ -19,7 +19,8 @@ DESCRIPTION = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", help="TimeHistory NetCDF (e.g. from 'hybridwsi simulate')")
-    p.add_argument("--coeffs", help="BEM coefficient NetCDF (hydrostatics, A_inf, damping)")
+    p.add_argument("--coeffs", help="coefficient file (hydrostatics, A_inf, damping): NetCDF, "
+                   "BEMIO .h5 or WAMIT ROOT.1 (seawater rho, g assumed)")
     p.add_argument("--dt", type=float, help="target hybrid time step [s] (default: the file's)")
     p.add_argument("--mass", type=float, help="rigid-body mass [kg] (default: from the file)")
     p.add_argument("--candidates", help="comma-separated candidate names (default: all available)")
@@ -33,9 +34,10 @@ def run(args: argparse.Namespace) -> int:
 
     from hybridwsi.diagnostic.partition import select_partition, table_to_json
     from hybridwsi.history import atomic_write, read_netcdf
+    from hybridwsi.hydro.formats import read_coefficients
 
     hist = read_netcdf(args.file)
-    coeffs = read_netcdf(args.coeffs) if args.coeffs else None
+    coeffs = read_coefficients(args.coeffs, assume_seawater=True) if args.coeffs else None
     cands = [c.strip() for c in args.candidates.split(",")] if args.candidates else None
     if args.dt is not None and not args.dt > 0:
         raise InputError(f"--dt must be positive, got {args.dt}")

@@ -17,7 +17,9 @@ DESCRIPTION = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--coeffs", metavar="FILE.nc", help="coefficient NetCDF (hybridwsi bem)")
+    src.add_argument("--coeffs", metavar="FILE",
+                     help="coefficient file: NetCDF (hybridwsi bem/coeffs, Capytaine), BEMIO "
+                          ".h5 or WAMIT ROOT.1 (seawater rho, g assumed)")
     src.add_argument("--panels", type=int, metavar="N",
                      help="compute coefficients of the paper's sphere with ~N panels")
     p.add_argument("--n-omega", type=int, default=120,
@@ -52,10 +54,10 @@ def _coefficients(args: argparse.Namespace):
 
     from hybridwsi.bodies import FloatingSphere
     from hybridwsi.errors import InputError
-    from hybridwsi.history import read_netcdf
+    from hybridwsi.hydro.formats import read_coefficients
 
     if args.coeffs:
-        return read_netcdf(args.coeffs)
+        return read_coefficients(args.coeffs, assume_seawater=True)
     if args.panels < 20 or args.n_omega < 10:
         raise InputError("--panels must be >= 20 and --n-omega >= 10")
     from hybridwsi.hydro import bem
