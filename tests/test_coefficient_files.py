@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -141,8 +142,6 @@ def test_wamit_export_import_identical(handmade, tmp_path):
 
 
 def test_sphere_round_trip_through_wamit(tmp_path):
-    from hybridwsi.hydro.formats.common import content_hash  # noqa: F401  (module importable)
-
     src = Path(__file__).parents[1] / "src" / "hybridwsi" / "data" / "bem_paper_sphere.nc"
     ds = read_coefficients(src)
     paths = write_wamit(ds, tmp_path / "sphere")
@@ -365,3 +364,24 @@ def test_cli_both_directions_and_bad_file(handmade, tmp_path, capsys):
     rc = main(["coeffs", str(tmp_path / "bad.nc"), "--out", str(out)])
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("error: ") and "Traceback" not in err
+
+
+def test_cli_simulate_reads_wamit_like_netcdf(tmp_path):
+    """``simulate --coeffs ROOT.1`` (seawater assumed) runs the same Cummins decay as the same
+    coefficients in NetCDF: the WAMIT path changes the file, not the physics."""
+    from hybridwsi.history import read_netcdf, to_netcdf
+
+    src = Path(__file__).parents[1] / "src" / "hybridwsi" / "data" / "bem_paper_sphere.nc"
+    ds = read_coefficients(src).assign_attrs(rho=1025.0, g=9.80665)  # label as seawater
+    nc = to_netcdf(ds.drop_vars("mass"), tmp_path / "sea.nc")
+    root = write_wamit(ds, tmp_path / "sea")[0]
+    runs = {}
+    for name, path in (("nc", nc), ("wamit", root)):
+        out = tmp_path / f"{name}.nc"
+        with pytest.warns(UserWarning, match="seawater") if name == "wamit" else nullcontext():
+            rc = main(["simulate", "--coeffs", str(path), "--mass", "7.06", "--decay", "0.02",
+                       "--duration", "2", "--dt", "0.01", "--radiation", "convolution",
+                       "--out", str(out), "--quiet"])
+        assert rc == 0
+        runs[name] = read_netcdf(out)["z"].values
+    np.testing.assert_allclose(runs["wamit"], runs["nc"], rtol=0, atol=1e-9 * 0.02)
