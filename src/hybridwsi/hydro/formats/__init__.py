@@ -41,13 +41,14 @@ def detect(path: str | Path) -> str:
         raise InputError(f"file not found: {path}")
     with open(path, "rb") as f:
         head = f.read(8)
-    if path.suffix.lower() in (".h5", ".hdf5") or (head == bemio.HDF5_SIGNATURE
-                                                   and path.suffix.lower() != ".nc"):
-        if bemio.is_bemio(path):
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        if bemio.is_bemio(path):  # needs h5py: InputError naming the extra without it
             return "bemio"
-        if path.suffix.lower() in (".h5", ".hdf5"):
-            raise InputError(f"{path.name}: HDF5 file without BEMIO's simulation_parameters/"
-                             f"body1 groups (not a WEC-Sim BEMIO file)")
+        raise InputError(f"{path.name}: HDF5 file without BEMIO's simulation_parameters/"
+                         f"body1 groups (not a WEC-Sim BEMIO file)")
+    if head == bemio.HDF5_SIGNATURE and path.suffix.lower() != ".nc" and bemio.has_h5py() \
+            and bemio.is_bemio(path):
+        return "bemio"
     if head.startswith(b"CDF") or head == bemio.HDF5_SIGNATURE:
         return "netcdf"  # hybridwsi's or Capytaine's: told apart after opening
     raise InputError(f"{path.name}: unknown coefficient file format (expected a WAMIT .1, a "

@@ -42,6 +42,15 @@ def _h5py():
     return h5py
 
 
+def has_h5py() -> bool:
+    """True when h5py can be imported."""
+    try:
+        _h5py()
+    except InputError:
+        return False
+    return True
+
+
 def is_bemio(path: Path) -> bool:
     """True for an HDF5 file with BEMIO's ``simulation_parameters`` and ``body1`` groups."""
     with open(path, "rb") as f:
