@@ -20,10 +20,12 @@ from hybridwsi.forces.linear import (
     QuadraticDamping,
     parse_known,
 )
+from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
 from hybridwsi.forces.radiation import RadiationMemory
 
 __all__ = [
     "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
-    "QuadraticDamping", "parse_known", "RadiationMemory",
+    "QuadraticDamping", "parse_known", "RadiationMemory", "MooringForce", "MooringLines",
+    "MooringSystem", "MooringTable",
 ]
