@@ -1,4 +1,4 @@
-"""Bodies and Capytaine BEM coefficients, checked against Hulme (1982) and analytic hydrostatics.
+"""The sphere and Capytaine BEM coefficients, checked against Hulme (1982) and analytic hydrostatics.
 
 Test mesh: 1600 hull panels (axisymmetric, with lid); the paper's 6400-panel mesh is behind
 ``@pytest.mark.slow``.
@@ -6,6 +6,7 @@ Test mesh: 1600 hull panels (axisymmetric, with lid); the paper's 6400-panel mes
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -65,13 +66,6 @@ def test_hydrostatic_stiffness_analytic_and_capytaine(hulme_run):
     assert float(ds["hydrostatic_stiffness"][0, 0]) == pytest.approx(c_exact, rel=1e-12)
     # Capytaine integrates over the polygonal mesh: the inscribed polygon loses a little area
     assert float(ds["hydrostatic_stiffness_mesh"][0, 0]) == pytest.approx(c_exact, rel=3e-3)
-
-
-def test_pitch_stiffness_of_sphere_is_weight_times_cog_offset():
-    # every pressure force on a sphere passes through its centre: C55 = m g (z_centre - z_G)
-    k = FloatingSphere.kramer2021()
-    assert k.hydrostatic_stiffness(("Pitch",))[0, 0] == pytest.approx(k.mass * k.g * 0.0348,
-                                                                       rel=1e-9)
 
 
 def test_buoyancy_force_exact_cap():
@@ -146,6 +140,9 @@ def test_dataset_schema(hulme_run):
                 "hybridwsi_version", "capytaine_version"):
         assert key in ds.attrs
     assert ds.attrs["n_panels"] == TEST_PANELS and ds.attrs["quality_flags"] == "[]"
+    # the sphere's DOF origin is its centre of mass (the centre, for the paper's sphere)
+    assert ds.attrs["reference_point"] == [0.0, 0.0, 0.0]
+    assert json.loads(ds.attrs["mesh"])["resolution"] == [40, 80]
     assert float(ds["mass"][0, 0]) == 7.06
 
 
@@ -281,6 +278,32 @@ def test_finite_depth_low_kh_is_filled(tmp_path):
                                deep["added_mass"].values, rtol=0.01)
 
 
+def test_shipped_coefficients_keep_their_input_hash():
+    # the body interface must not change what goes into the sphere's cache key: the plans of
+    # the paper and Kramer configurations carry the hashes of the shipped files (no solving)
+    def shipped(name: str) -> str:
+        with xr.open_dataset(bem.PAPER_COEFFS.parent / name) as f:
+            return f.attrs["input_hash"]
+
+    assert bem.plan(**bem.paper_configuration()).input_hash == shipped("bem_paper_sphere.nc")
+    kramer = bem.plan(FloatingSphere.kramer2021(), np.geomspace(0.1, 40, 400), water_depth=0.9,
+                      n_panels=6400)
+    low, high = kramer.parts
+    assert low.input_hash == shipped("bem_kramer2021_sphere_finite_depth_part.nc")
+    assert high.input_hash == shipped("bem_kramer2021_sphere_deep_part.nc")
+    assert low.config["solver"]["low_kh_resolution"] == [40, 80]
+
+
+def test_sphere_panel_size_names_the_same_mesh_as_a_panel_count():
+    body, w = FloatingSphere.paper(), [1.0, 2.0]
+    by_count = bem.plan(body, w, n_panels=1600)
+    by_size = bem.plan(body, w, panel_size=math.pi * R / 40)  # 40 panels along a half meridian
+    assert by_size.mesh == by_count.mesh == {"resolution": (40, 80)}
+    assert by_size.input_hash == by_count.input_hash
+    with pytest.raises(InputError, match="one of"):
+        bem.plan(body, w, n_panels=1600, resolution=(40, 80))
+
+
 def test_paper_configuration():
     cfg = bem.paper_configuration()
     w = cfg["omega"]
@@ -301,6 +324,26 @@ def test_cli_bem_writes_netcdf(tmp_path, capsys):
     assert "A_inf" in text and "Tn =" in text and "wall time" in text
     assert read_netcdf(out).sizes["omega"] == 6
     assert main(["bem", "--omega-min", "-1"]) == 2
+
+
+def test_cli_bem_takes_any_body(tmp_path, capsys):
+    from hybridwsi.bodies import AxisymmetricBody
+    from hybridwsi.cli import main
+    from hybridwsi.history import read_netcdf
+
+    spar = AxisymmetricBody(profile=[(0, -2.0), (0.5, -2.0), (0.5, 1.0)], cog=(0, 0, -1.2),
+                            inertia=(3.0, 3.0, 1.0))
+    spec = tmp_path / "spar.json"
+    spec.write_text(spar.to_json())
+    out = tmp_path / "c.nc"
+    rc = main(["bem", "--body", str(spec), "--panel-size", "0.25", "--dofs", "Heave,Pitch",
+               "--n-omega", "3", "--omega-max", "3", "--quiet", "--no-cache", "--out", str(out)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "Pitch: A_inf" in text and "N m/rad" in text
+    ds = read_netcdf(out)
+    assert list(ds["radiating_dof"].values) == ["Heave", "Pitch"]
+    assert main(["bem", "--body", "{\"type\": \"Barge\"}", "--quiet"]) == 2
 
 
 def test_shipped_paper_coefficients_match_hulme():

@@ -1,27 +1,39 @@
-"""``hybridwsi bem``: Capytaine coefficients of a floating sphere (defaults: the paper's set-up)."""
+"""``hybridwsi bem``: Capytaine coefficients of a floating body (defaults: the paper's sphere)."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 
-HELP = "compute BEM coefficients (A, B, excitation, A_inf, C) of a floating sphere with Capytaine"
+HELP = "compute BEM coefficients (A, B, excitation, A_inf, C) of a floating body with Capytaine"
 DESCRIPTION = (
-    "Solve the radiation/diffraction problems of a floating sphere with Capytaine (axisymmetric "
-    "mesh with lid, direct method) and write the coefficient NetCDF. Defaults reproduce the "
-    "paper: R = 0.15 m, m = 7.06 kg, 6400 panels, 400 frequencies 0.1-40 rad/s, deep water. "
-    "Results are cached (~/.cache/hybridwsi/bem or $HYBRIDWSI_CACHE/bem) and an interrupted "
-    "run resumes where it stopped."
+    "Solve the radiation/diffraction problems of a floating body with Capytaine (symmetric mesh "
+    "with lid where the body allows it, direct method) and write the coefficient NetCDF. "
+    "Defaults reproduce the paper: a sphere R = 0.15 m, m = 7.06 kg, 6400 panels, 400 "
+    "frequencies 0.1-40 rad/s, deep water. --body takes any other body (a JSON description, "
+    "hybridwsi.bodies.body_from_dict). Results are cached (~/.cache/hybridwsi/bem or "
+    "$HYBRIDWSI_CACHE/bem) and an interrupted run resumes where it stopped."
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--body", default=None,
+                        help="body description: a JSON file or JSON text with a 'type' "
+                             "(FloatingSphere, AxisymmetricBody, MeshBody, RigidAssembly); "
+                             "replaces --radius/--mass/--rho/--g")
     parser.add_argument("--radius", type=float, default=0.15, help="sphere radius [m]")
-    parser.add_argument("--mass", type=float, default=7.06, help="body mass [kg]")
-    parser.add_argument("--panels", type=int, default=6400, help="approximate hull panel count")
+    parser.add_argument("--mass", type=float, default=7.06, help="sphere mass [kg]")
+    parser.add_argument("--panels", type=int, default=None,
+                        help="approximate hull panel count (sphere default 6400)")
+    parser.add_argument("--panel-size", type=float, default=None,
+                        help="hull panel size [m] (instead of --panels)")
+    parser.add_argument("--dofs", default=None,
+                        help="comma-separated DOFs, e.g. Surge,Heave,Pitch (default: the body's)")
     parser.add_argument("--omega-min", type=float, default=0.1, help="lowest frequency [rad/s]")
     parser.add_argument("--omega-max", type=float, default=40.0, help="highest frequency [rad/s]")
     parser.add_argument("--n-omega", type=int, default=400, help="number of log-spaced frequencies")
@@ -38,6 +50,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "long sweeps)")
 
 
+def read_body(spec: str):
+    """A body from a JSON file or JSON text (:func:`hybridwsi.bodies.body_from_dict`)."""
+    from hybridwsi.bodies import body_from_dict
+    from hybridwsi.errors import InputError
+
+    path = Path(spec).expanduser()
+    text = path.read_text() if path.is_file() else spec
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError:
+        raise InputError(f"--body must be a JSON file or JSON text, got {spec!r}") from None
+    return body_from_dict(data)
+
+
 def run(args: argparse.Namespace) -> int:
     from hybridwsi.bodies import FloatingSphere
     from hybridwsi.errors import InputError
@@ -46,33 +72,44 @@ def run(args: argparse.Namespace) -> int:
 
     if not (0 < args.omega_min < args.omega_max) or args.n_omega < 2:
         raise InputError("need 0 < --omega-min < --omega-max and --n-omega >= 2")
-    body = FloatingSphere(radius=args.radius, mass=args.mass, rho=args.rho, g=args.g)
+    body = (read_body(args.body) if args.body is not None
+            else FloatingSphere(radius=args.radius, mass=args.mass, rho=args.rho, g=args.g))
     omega = np.geomspace(args.omega_min, args.omega_max, args.n_omega)
     start = time.perf_counter()
     ds = bem.compute(body, omega, water_depth=args.depth, n_panels=args.panels,
-                     method=args.method, cache_dir=args.cache_dir, use_cache=not args.no_cache,
+                     panel_size=args.panel_size, dofs=args.dofs, method=args.method,
+                     cache_dir=args.cache_dir, use_cache=not args.no_cache,
                      progress=not args.quiet, n_jobs=args.jobs)
     wall = time.perf_counter() - start
     to_netcdf(ds, args.out)
-    _print_summary(ds, body, wall, args.out)
+    _print_summary(ds, wall, args.out)
     return 0
 
 
-def _print_summary(ds, body, wall: float, out: str) -> None:
-    a_inf = float(ds["added_mass_inf"].values[0, 0])
-    c = float(ds["hydrostatic_stiffness"].values[0, 0])
-    # undamped natural frequency: solve ω² (m + A(ω)) = C on the computed A(ω)
-    w = ds["omega"].values
-    a = ds["added_mass"].values[:, 0, 0]
-    resid = c - w**2 * (body.mass + a)
-    i = int(np.flatnonzero(np.diff(np.sign(resid)))[0]) if np.any(np.diff(np.sign(resid))) else None
+def _print_summary(ds, wall: float, out: str) -> None:
+    from hybridwsi.dofs import coefficient_unit
+    from hybridwsi.hydro import coefficients as co
+
+    w = co.omega(ds)
     print(f"panels: {ds.attrs['n_panels']} (+{ds.attrs['n_lid_panels']} lid), "
           f"frequencies: {w.size} ({w[0]:.3g}-{w[-1]:.3g} rad/s)")
-    print(f"A_inf = {a_inf:.4f} kg   A(omega_max = {w[-1]:.3g}) = {a[-1]:.4f} kg   C = {c:.2f} N/m")
-    if i is not None:
-        wn = w[i] - resid[i] * (w[i + 1] - w[i]) / (resid[i + 1] - resid[i])
-        an = float(np.interp(wn, w, a))
-        print(f"natural frequency {wn:.4f} rad/s (Tn = {2 * np.pi / wn:.4f} s), A(omega_n) = {an:.4f} kg")
+    a_inf = co.matrix(ds, "added_mass_inf") if not np.isnan(ds["added_mass_inf"].values).any() \
+        else np.full((len(co.dofs(ds)),) * 2, np.nan)
+    mass, stiff = co.matrix(ds, "mass"), co.matrix(ds, "hydrostatic_stiffness")
+    a_w = co.matrix_omega(ds, "added_mass")
+    for k, dof in enumerate(co.dofs(ds)):
+        mu, cu = coefficient_unit(dof, dof, "mass"), coefficient_unit(dof, dof, "stiffness")
+        a, c = a_w[:, k, k], stiff[k, k]
+        print(f"{dof}: A_inf = {a_inf[k, k]:.4f} {mu}   A(omega_max = {w[-1]:.3g}) = {a[-1]:.4f} "
+              f"{mu}   C = {c:.2f} {cu}")
+        # uncoupled undamped natural frequency: solve ω² (M + A(ω)) = C on the computed A(ω)
+        resid = c - w**2 * (mass[k, k] + a)
+        crossings = np.flatnonzero(np.diff(np.sign(resid)))
+        if c > 0 and crossings.size:
+            i = int(crossings[0])
+            wn = w[i] - resid[i] * (w[i + 1] - w[i]) / (resid[i + 1] - resid[i])
+            print(f"  natural frequency {wn:.4f} rad/s (Tn = {2 * np.pi / wn:.4f} s), "
+                  f"A(omega_n) = {float(np.interp(wn, w, a)):.4f} {mu}")
     flags = ds.attrs.get("quality_flags", "[]")
     if flags != "[]":
         print(f"quality flags: {flags}")

@@ -4,6 +4,13 @@
 radiation damping B(ω), excitation force (Froude–Krylov + diffraction), the limits A(∞) and
 A(0), the hydrostatic stiffness and the rigid-body mass.
 
+Any :class:`hybridwsi.bodies.Body` (the paper's sphere, a body of revolution from a profile,
+a mesh file, a rigid assembly): the body supplies the Capytaine mesh (its symmetries and lid),
+the DOF origin (``reference_point``, written to ``attrs``), the rigid-body mass matrix and the
+hydrostatic stiffness. The mesh resolution is a panel size [m] (or a panel count) for every
+body; the sphere also keeps its ``(n_theta, n_phi)`` resolution. :func:`plan` checks the
+inputs and computes the cache keys without solving.
+
 How the run is organised (and why):
 
 - Frequencies are solved in chunks with ``capytaine.BEMSolver.fill_dataset``; after each chunk
@@ -40,6 +47,7 @@ import math
 import os
 import warnings
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
@@ -47,9 +55,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.bodies import FloatingSphere, check_dofs
+from hybridwsi.bodies import Body, FloatingSphere, check_dofs
+from hybridwsi.dofs import force_unit
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import read_netcdf, to_netcdf
+from hybridwsi.hydro.coefficients import pair_units_attr
 
 #: number of frequencies solved between two checkpoints
 CHUNK_SIZE = 10
@@ -113,57 +123,164 @@ def default_cache_dir() -> Path:
 
 
 # ---------------------------------------------------------------------------- public API
-def compute(
-    body: FloatingSphere,
+@dataclass(eq=False)
+class Plan:
+    """Everything :func:`compute` will do, decided before any solve (see :func:`plan`).
+
+    ``mesh`` and ``low_kh_mesh`` are the body's canonical mesh options
+    (:meth:`hybridwsi.bodies.Body.mesh_options`); ``config`` is every input but the frequencies
+    (the key of the resumable store, hash ``config_hash``); ``input_hash`` the key of the
+    result (``attrs["input_hash"]``). A finite-depth request solved in two parts has
+    ``parts = (finite-depth part or None, deep-water part)`` and ``deep_water_kh``.
+    """
+
+    body: Body
+    omega: np.ndarray
+    depth: float
+    dofs: tuple[str, ...]
+    directions: np.ndarray
+    mesh: dict[str, Any]
+    low_kh_mesh: dict[str, Any]
+    method: str
+    symmetric: bool
+    lid: bool
+    low_kh: str
+    include_inf: bool
+    include_zero: bool
+    config: dict[str, Any]
+    config_hash: str
+    input_hash: str
+    parts: tuple[Plan | None, Plan] | None = None
+    deep_water_kh: float | None = None
+
+
+def plan(
+    body: Body,
     omega: Sequence[float] | np.ndarray,
     *,
     water_depth: float = math.inf,
-    dofs: Sequence[str] = ("Heave",),
+    dofs: Sequence[str] | None = None,
     wave_directions: Sequence[float] = (0.0,),
-    n_panels: int = DEFAULT_PANELS,
-    resolution: tuple[int, int] | None = None,
+    panel_size: float | None = None,
+    n_panels: int | None = None,
+    resolution: tuple[int, int] | int | None = None,
     include_inf: bool = True,
     include_zero: bool = True,
-    cache_dir: str | os.PathLike | None = None,
-    progress: bool = True,
     method: str = "direct",
     symmetric: bool = True,
     lid: bool = True,
     low_kh: str = "fingreen",
     low_kh_panels: int | None = 1600,
     deep_water_kh: float | None = 3.0,
+) -> Plan:
+    """Check the inputs of :func:`compute` and decide what it solves, without solving.
+
+    Same parameters as :func:`compute` (those that change the result). ``plan(...).input_hash``
+    is the ``attrs["input_hash"]`` that ``compute`` writes; the shipped coefficient files are
+    used when one of them carries the hash of a plan (or of one of its ``parts``).
+    """
+    if not isinstance(body, Body):
+        raise InputError(f"body must be a hybridwsi.bodies.Body, got {type(body).__name__}")
+    omega = _check_omega(omega)
+    dofs = check_dofs(body.dofs if dofs is None else dofs)
+    directions = _check_directions(wave_directions)
+    depth = _check_depth(water_depth, body)
+    if method not in ("direct", "indirect"):
+        raise InputError(f"method must be 'direct' or 'indirect', got {method!r}")
+    if low_kh not in ("fingreen", "drop"):
+        raise InputError(f"low_kh must be 'fingreen' or 'drop', got {low_kh!r}")
+    # only the sphere knows a (n_theta, n_phi) resolution: other bodies refuse it
+    sphere_only = {} if resolution is None else {"resolution": resolution}
+    mesh = body.mesh_options(panel_size=panel_size, n_panels=n_panels, **sphere_only)
+    if math.isfinite(depth) and deep_water_kh is not None:
+        from hybridwsi.waves import dispersion_k
+
+        deep = dispersion_k(omega, depth, body.g) * depth >= float(deep_water_kh)
+        if deep.any():
+            common = dict(dofs=dofs, wave_directions=directions, method=method,
+                          symmetric=symmetric, lid=lid, deep_water_kh=None, **mesh)
+            high = plan(body, omega[deep], water_depth=math.inf, include_inf=include_inf,
+                        include_zero=False, **common)
+            low = (plan(body, omega[~deep], water_depth=depth, include_inf=False,
+                        include_zero=include_zero, low_kh=low_kh, low_kh_panels=low_kh_panels,
+                        **common)
+                   if (~deep).any() else None)
+            joined = _sha256([None if low is None else low.input_hash, high.input_hash,
+                              float(deep_water_kh)])
+            return Plan(body=body, omega=omega, depth=depth, dofs=dofs, directions=directions,
+                        mesh=mesh, low_kh_mesh=mesh, method=method, symmetric=symmetric,
+                        lid=lid, low_kh=low_kh, include_inf=include_inf,
+                        include_zero=include_zero, config={}, config_hash="",
+                        input_hash=joined, parts=(low, high),
+                        deep_water_kh=float(deep_water_kh))
+    # FinGreen3D costs ~10 s per frequency on 6400 panels; the waves it is needed for (kh < 0.13,
+    # wavelength > 40 body diameters in 0.9 m) are resolved by a much coarser hull
+    low_mesh = mesh
+    if math.isfinite(depth) and low_kh_panels is not None:
+        try:
+            coarse = body.mesh_options(n_panels=int(low_kh_panels))
+        except InputError:  # a body whose panels are fixed (a mesh file)
+            coarse = mesh
+        if body.panel_count(**coarse) < body.panel_count(**mesh):
+            low_mesh = coarse
+
+    config = _configuration(body, depth, dofs, directions, mesh, method, symmetric, lid, low_kh)
+    if math.isfinite(depth):  # deep water never calls the low-kh fallback: keep its hash
+        for key, value in body.mesh_description(**low_mesh).items():
+            if key != "kind":  # e.g. the sphere's "low_kh_resolution"
+                config["solver"][f"low_kh_{key}"] = value
+    input_hash = _sha256({**config, "omega": omega.tolist(), "include_inf": include_inf,
+                          "include_zero": include_zero})
+    return Plan(body=body, omega=omega, depth=depth, dofs=dofs, directions=directions,
+                mesh=mesh, low_kh_mesh=low_mesh, method=method, symmetric=symmetric, lid=lid,
+                low_kh=low_kh, include_inf=include_inf, include_zero=include_zero,
+                config=config, config_hash=_sha256(config), input_hash=input_hash)
+
+
+def compute(
+    body: Body,
+    omega: Sequence[float] | np.ndarray,
+    *,
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool = True,
     use_cache: bool = True,
     chunk_size: int = CHUNK_SIZE,
     n_jobs: int | None = None,
+    **options: Any,
 ) -> xr.Dataset:
     """Linear hydrodynamic coefficients of ``body`` from Capytaine (see module docstring).
 
     Parameters
     ----------
-    body : FloatingSphere
-        The floating body (its ``rho`` and ``g`` are used).
+    body : hybridwsi.bodies.Body
+        Any floating body (sphere, axisymmetric profile, mesh file, assembly); its ``rho``,
+        ``g``, reference point (DOF origin), mass properties and hydrostatics are used.
     omega : array_like
         Wave frequencies [rad/s], finite and > 0 (sorted on output; duplicates rejected).
+    **options
+        The keyword arguments of :func:`plan` (what is solved; they enter the cache key):
     water_depth : float
         Water depth [m]; ``inf`` for deep water.
-    dofs : sequence of str
-        Rigid-body degrees of freedom (Capytaine names), about the centre of mass.
+    dofs : sequence of str, optional
+        Rigid-body degrees of freedom (Capytaine names) about the body's reference point;
+        default ``body.dofs`` (the sphere: heave).
     wave_directions : sequence of float
         Incident wave directions [rad] for the excitation force.
-    n_panels : int
-        Approximate number of hull panels (ignored when ``resolution`` is given).
-    resolution : (n_theta, n_phi), optional
-        Capytaine ``mesh_sphere`` resolution (full sphere).
+    panel_size : float, optional
+        Target panel size [m] of the hull (and lid) mesh; for every body but a mesh file,
+        whose panels are fixed.
+    n_panels : int, optional
+        Approximate number of hull panels instead of ``panel_size``.
+    resolution : (n_theta, n_phi) or int, optional
+        The sphere only: Capytaine ``mesh_sphere`` resolution (full sphere) or a panel count.
+        Give at most one of ``panel_size``, ``n_panels``, ``resolution``; none: the body's
+        default (the sphere: 6400 hull panels; others about 1000).
     include_inf, include_zero : bool
         Also solve the ω = ∞ / ω = 0 radiation limits (else the variables are NaN).
-    cache_dir : path, optional
-        Cache folder (default :func:`default_cache_dir`).
-    progress : bool
-        Show a tqdm progress bar over frequencies.
     method : {"direct", "indirect"}
         Capytaine boundary integral formulation.
     symmetric, lid : bool
-        Use the axisymmetric mesh / add a waterplane lid (irregular frequencies).
+        Keep the mesh's symmetries / add a waterplane lid (irregular frequencies).
     low_kh : {"fingreen", "drop"}
         Finite depth: re-solve NaN frequencies with FinGreen3D, or drop them.
     deep_water_kh : float or None
@@ -173,8 +290,13 @@ def compute(
         12 rad/s and negative above 25 rad/s), while the bottom changes A by < 1 %. None: solve
         every frequency in finite depth.
     low_kh_panels : int or None
-        Hull panels for the FinGreen3D re-solves (default 1600; None: the main mesh). Those
-        frequencies have waves much longer than the body, where a coarse hull is converged.
+        Hull panels for the FinGreen3D re-solves (default 1600, used when coarser than the main
+        mesh; None: the main mesh). Those frequencies have waves much longer than the body,
+        where a coarse hull is converged.
+    cache_dir : path, optional
+        Cache folder (default :func:`default_cache_dir`).
+    progress : bool
+        Show a tqdm progress bar over frequencies.
     use_cache : bool
         Read and write the cache (False: solve everything, write nothing).
     chunk_size : int
@@ -189,77 +311,47 @@ def compute(
     Returns
     -------
     xarray.Dataset
-        Coefficients as in ``docs/DATA_MODEL.md``; ``attrs["input_hash"]`` identifies the
-        inputs, ``attrs["quality_flags"]`` lists problems found (JSON list, empty when clean).
+        Coefficients as in ``docs/DATA_MODEL.md`` (matrices about ``attrs["reference_point"]``,
+        units per DOF pair); ``attrs["input_hash"]`` identifies the inputs,
+        ``attrs["quality_flags"]`` lists problems found (JSON list, empty when clean).
     """
-    omega = _check_omega(omega)
-    dofs = check_dofs(dofs)
-    directions = _check_directions(wave_directions)
-    depth = _check_depth(water_depth, body)
-    if method not in ("direct", "indirect"):
-        raise InputError(f"method must be 'direct' or 'indirect', got {method!r}")
-    if low_kh not in ("fingreen", "drop"):
-        raise InputError(f"low_kh must be 'fingreen' or 'drop', got {low_kh!r}")
     if int(chunk_size) < 1:
         raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
-    n_jobs = _n_jobs(n_jobs)
-    resolution = body.panel_resolution(resolution if resolution is not None else n_panels)
-    if math.isfinite(depth) and deep_water_kh is not None:
-        from hybridwsi.waves import dispersion_k
+    return _execute(plan(body, omega, **options), cache_dir=cache_dir, progress=progress,
+                    use_cache=use_cache, chunk_size=int(chunk_size), n_jobs=_n_jobs(n_jobs))
 
-        deep = dispersion_k(omega, depth, body.g) * depth >= float(deep_water_kh)
-        if deep.any():
-            common = dict(dofs=dofs, wave_directions=directions, resolution=resolution,
-                          cache_dir=cache_dir, progress=progress, method=method,
-                          symmetric=symmetric, lid=lid, use_cache=use_cache,
-                          chunk_size=chunk_size, deep_water_kh=None, n_jobs=n_jobs)
-            high = compute(body, omega[deep], water_depth=math.inf, include_inf=include_inf,
-                           include_zero=False, **common)
-            low = (compute(body, omega[~deep], water_depth=depth, include_inf=False,
-                           include_zero=include_zero, low_kh=low_kh,
-                           low_kh_panels=low_kh_panels, **common)
-                   if (~deep).any() else None)
-            return _join_depths(low, high, depth, float(deep_water_kh))
-    # FinGreen3D costs ~10 s per frequency on 6400 panels; the waves it is needed for (kh < 0.13,
-    # wavelength > 40 body diameters in 0.9 m) are resolved by a much coarser hull
-    low_res = resolution
-    if low_kh_panels is not None:
-        coarse = body.panel_resolution(int(low_kh_panels))
-        low_res = coarse if coarse[0] * coarse[1] < resolution[0] * resolution[1] else resolution
 
-    config = _configuration(body, depth, dofs, directions, resolution, method, symmetric, lid,
-                            low_kh)
-    if math.isfinite(depth):  # deep water never calls the low-kh fallback: keep its hash
-        config["solver"]["low_kh_resolution"] = list(low_res)
-    config_hash = _sha256(config)
-    input_hash = _sha256({**config, "omega": omega.tolist(), "include_inf": include_inf,
-                          "include_zero": include_zero})
+def _execute(p: Plan, *, cache_dir, progress: bool, use_cache: bool, chunk_size: int,
+             n_jobs: int | None) -> xr.Dataset:
+    """Run a :class:`Plan`: cached result, shipped file, or solve the missing frequencies."""
+    run = dict(cache_dir=cache_dir, progress=progress, use_cache=use_cache,
+               chunk_size=chunk_size, n_jobs=n_jobs)
+    if p.parts is not None:
+        low, high = p.parts
+        return _join_depths(None if low is None else _execute(low, **run), _execute(high, **run),
+                            p.depth, p.deep_water_kh, p.input_hash)
     root = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
-    final_path = root / f"coeffs_{input_hash[:24]}.nc"
-    store_path = root / f"store_{config_hash[:24]}.nc"
+    final_path = root / f"coeffs_{p.input_hash[:24]}.nc"
+    store_path = root / f"store_{p.config_hash[:24]}.nc"
 
     if use_cache and not final_path.is_file():
-        shipped = _shipped(input_hash)
+        shipped = _shipped(p.input_hash)
         if shipped is not None:
             to_netcdf(shipped, final_path)  # seed the cache: later calls take the usual path
     if use_cache and final_path.is_file():
         cached = _read_cache(final_path)
-        if cached is not None and cached.attrs.get("input_hash") == input_hash:
+        if cached is not None and cached.attrs.get("input_hash") == p.input_hash:
             for flag in json.loads(cached.attrs.get("quality_flags", "[]")):
-                warnings.warn(f"BEM coefficients (cached): {flag}", stacklevel=2)
+                warnings.warn(f"BEM coefficients (cached): {flag}", stacklevel=3)
             return cached
 
-    limits = [w for w, on in ((0.0, include_zero), (math.inf, include_inf)) if on]
+    limits = [w for w, on in ((0.0, p.include_zero), (math.inf, p.include_inf)) if on]
     store = _read_cache(store_path) if use_cache and store_path.is_file() else None
-    todo = _missing(np.concatenate([omega, limits]), store)
+    todo = _missing(np.concatenate([p.omega, limits]), store)
     if todo.size:
-        store = _solve_missing(body, todo, store, store_path if use_cache else None, dofs=dofs,
-                               directions=directions, depth=depth, resolution=resolution,
-                               method=method, symmetric=symmetric, lid=lid, low_kh=low_kh,
-                               low_res=low_res,
-                               progress=progress, chunk_size=int(chunk_size), n_jobs=n_jobs)
-    ds = _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
-                   include_inf, include_zero)
+        store = _solve_missing(p, todo, store, store_path if use_cache else None,
+                               progress=progress, chunk_size=chunk_size, n_jobs=n_jobs)
+    ds = _assemble(store, p)
     if use_cache:
         to_netcdf(ds, final_path)
     return ds
@@ -291,15 +383,13 @@ def _check_directions(directions: Any) -> np.ndarray:
     return d
 
 
-def _check_depth(depth: Any, body: FloatingSphere) -> float:
+def _check_depth(depth: Any, body: Body) -> float:
     try:
         h = float(depth)
     except (TypeError, ValueError):
         raise InputError(f"water_depth must be a number or inf, got {depth!r}") from None
     if math.isnan(h) or h <= 0:
         raise InputError(f"water_depth must be > 0 (or inf), got {depth!r}")
-    if not isinstance(body, FloatingSphere):
-        raise InputError(f"body must be a hybridwsi.bodies.FloatingSphere, got {type(body).__name__}")
     if math.isfinite(h) and h <= body.draft:
         raise InputError(f"water_depth {h} m must exceed the body draft {body.draft} m")
     return h
@@ -313,14 +403,15 @@ def _pkg_version(name: str) -> str:
         return "unknown"
 
 
-def _configuration(body, depth, dofs, directions, resolution, method, symmetric, lid,
+def _configuration(body: Body, depth, dofs, directions, mesh: dict, method, symmetric, lid,
                    low_kh) -> dict[str, Any]:
-    """Every input except the frequencies (key of the resumable store)."""
+    """Every input except the frequencies (key of the resumable store): the body's
+    ``to_dict()`` and ``mesh_description()`` (for the paper's sphere exactly the keys of the
+    sphere-only code, so the shipped coefficients stay valid)."""
     return {
         "body": body.to_dict(), "water_depth": depth if math.isfinite(depth) else "inf",
         "dofs": list(dofs), "wave_directions": directions.tolist(),
-        "mesh": {"kind": "mesh_sphere", "resolution": list(resolution), "symmetric": symmetric,
-                 "lid": lid},
+        "mesh": {**body.mesh_description(**mesh), "symmetric": symmetric, "lid": lid},
         "solver": {"method": method, "green_function": "Delhommeau", "low_kh": low_kh},
         "versions": {"hybridwsi": _pkg_version("hybridwsi"),
                      "capytaine": _pkg_version("capytaine")},
@@ -368,13 +459,12 @@ def _n_jobs(n_jobs: int | None) -> int | None:
     return n
 
 
-def _auto_jobs(n_freq: int, resolution: tuple[int, int]) -> int:
+def _auto_jobs(n_freq: int, panels: int) -> int:
     """Usable CPUs when the sweep is long enough to repay the workers' start-up (~3 s each):
     an estimated sequential time > 30 s (about 0.5 s per frequency at 6400 hull panels, growing
     like panels^1.5 with the axisymmetric solver), else 1."""
     avail = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
     cpus = max(1, len(avail) if avail else (os.cpu_count() or 1))
-    panels = resolution[0] * resolution[1] / 2.0
     estimate = n_freq * 0.5 * (panels / 6400.0) ** 1.5
     return cpus if estimate > 30.0 else 1
 
@@ -408,8 +498,7 @@ def _quiet_capytaine():
         logger.setLevel(level)
 
 
-def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, resolution, method,
-                   symmetric, lid, low_kh, progress, chunk_size, n_jobs=None, low_res=None
+def _solve_missing(p: Plan, todo, store, store_path, *, progress, chunk_size, n_jobs=None
                    ) -> xr.Dataset:
     """Solve ``todo`` frequencies chunk by chunk, checkpointing into ``store_path``.
 
@@ -421,17 +510,17 @@ def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, re
 
     finite = todo[np.isfinite(todo) & (todo > 0)]
     limits = todo[~(np.isfinite(todo) & (todo > 0))]
-    n_jobs = _auto_jobs(finite.size, resolution) if n_jobs is None else n_jobs
+    task = dict(body=p.body, dofs=p.dofs, directions=p.directions, depth=p.depth, mesh=p.mesh,
+                method=p.method, symmetric=p.symmetric, lid=p.lid, low_kh=p.low_kh,
+                low_mesh=p.low_kh_mesh)
+    cbody, _ = _body_and_solver(p.body, p.dofs, p.mesh, p.symmetric, p.lid, p.method)
+    _warn_mesh_resolution(cbody, finite, p.depth, p.body.g)
+    n_jobs = _auto_jobs(finite.size, int(cbody.mesh.nb_faces)) if n_jobs is None else n_jobs
     if n_jobs > 1:  # chunks small enough to keep every worker busy
         chunk_size = max(1, min(chunk_size, -(-finite.size // (2 * n_jobs))))
     chunks = [finite[i:i + chunk_size] for i in range(0, finite.size, chunk_size)]
     if limits.size:
         chunks.append(limits)  # radiation only; solved last so partial progress is visible first
-    task = dict(body=body, dofs=tuple(dofs), directions=directions, depth=depth,
-                resolution=resolution, method=method, symmetric=symmetric, lid=lid,
-                low_kh=low_kh, low_res=low_res)
-    cbody, _ = _body_and_solver(body, tuple(dofs), resolution, symmetric, lid, method)
-    _warn_mesh_resolution(cbody, finite, depth, body.g)
     bar = tqdm(total=todo.size, unit="ω", desc="BEM", disable=not progress)
 
     def done(part: xr.Dataset) -> None:
@@ -464,31 +553,32 @@ def _solve_missing(body, todo, store, store_path, *, dofs, directions, depth, re
 _WORKER_CACHE: dict[str, Any] = {}
 
 
-def _body_and_solver(body, dofs: tuple, resolution, symmetric: bool, lid: bool, method: str):
+def _body_and_solver(body: Body, dofs: tuple, mesh: dict, symmetric: bool, lid: bool,
+                     method: str):
     """Capytaine body and solver, built once per process and configuration (the parent's
     mesh-resolution check and a sequential sweep share them; each worker builds its own)."""
     import capytaine as cpt
 
-    key = repr((body.to_json(), dofs, resolution, symmetric, lid, method))
+    key = repr((body.to_json(), dofs, json.dumps(mesh, sort_keys=True), symmetric, lid, method))
     if key not in _WORKER_CACHE:
         _WORKER_CACHE.clear()  # one configuration at a time: meshes are large
-        _WORKER_CACHE[key] = (body.capytaine_body(list(dofs), resolution=resolution,
-                                                  symmetric=symmetric, lid=lid),
+        _WORKER_CACHE[key] = (body.capytaine_body(list(dofs), symmetric=symmetric, lid=lid,
+                                                  **mesh),
                               cpt.BEMSolver(method=method))
     return _WORKER_CACHE[key]
 
 
-def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, resolution, method,
-                symmetric, lid, low_kh, low_res) -> xr.Dataset:
+def _solve_task(chunk: np.ndarray, *, body, dofs, directions, depth, mesh, method,
+                symmetric, lid, low_kh, low_mesh) -> xr.Dataset:
     """Solve one chunk of frequencies (in this process or a worker)."""
-    cbody, solver = _body_and_solver(body, tuple(dofs), resolution, symmetric, lid, method)
+    cbody, solver = _body_and_solver(body, tuple(dofs), mesh, symmetric, lid, method)
     with blas_single_thread(), warnings.catch_warnings(), _quiet_capytaine():
         warnings.simplefilter("ignore", RuntimeWarning)  # NaN handled explicitly below
         part = _solve_chunk(solver, cbody, chunk, directions=directions, depth=depth,
                             rho=body.rho, g=body.g)
         if math.isfinite(depth):
-            part = _fix_low_kh(part, body, list(dofs), directions, depth, low_res or resolution,
-                               method, symmetric, low_kh)
+            part = _fix_low_kh(part, body, list(dofs), directions, depth, low_mesh, method,
+                               symmetric, low_kh)
     return part
 
 
@@ -540,7 +630,7 @@ def _str_dofs(da: xr.DataArray) -> xr.DataArray:
     return da
 
 
-def _fix_low_kh(part, body, dofs, directions, depth, resolution, method, symmetric,
+def _fix_low_kh(part, body, dofs, directions, depth, mesh, method, symmetric,
                 low_kh) -> xr.Dataset:
     """Re-solve NaN frequencies (finite depth, small kh) with FinGreen3D on the unlidded hull."""
     bad = np.isnan(part["added_mass"]).any(("radiating_dof", "influenced_dof")).values
@@ -549,7 +639,7 @@ def _fix_low_kh(part, body, dofs, directions, depth, resolution, method, symmetr
         return part
     import capytaine as cpt
 
-    hull = body.capytaine_body(dofs, resolution=resolution, symmetric=symmetric, lid=False)
+    hull = body.capytaine_body(dofs, symmetric=symmetric, lid=False, **mesh)
     solver = cpt.BEMSolver(green_function=cpt.FinGreen3D(), method=method)
     directions = np.asarray(part["wave_direction"].values)
     for w in omegas:
@@ -581,10 +671,10 @@ def _warn_mesh_resolution(cbody, omegas: np.ndarray, depth: float, g: float) -> 
 
 
 # ---------------------------------------------------------------------------- assembly
-def _assemble(store, omega, body, dofs, directions, depth, resolution, config, input_hash,
-              include_inf, include_zero) -> xr.Dataset:
+def _assemble(store: xr.Dataset, p: Plan) -> xr.Dataset:
     from hybridwsi import __version__
 
+    omega, dofs, body = p.omega, p.dofs, p.body
     w_store = store["omega"].values
     idx = [int(np.flatnonzero(_same(w_store, w))[0]) for w in omega]
     ds = store.isel(omega=idx).assign_coords(omega=omega)
@@ -603,42 +693,53 @@ def _assemble(store, omega, body, dofs, directions, depth, resolution, config, i
             return np.full((len(dofs), len(dofs)), np.nan)
         return store["added_mass"].isel(omega=int(hit[0])).values
 
-    a_inf, a_zero = limit(math.inf, include_inf), limit(0.0, include_zero)
-    for name, val, on in (("added_mass_inf", a_inf, include_inf),
-                          ("added_mass_zero", a_zero, include_zero)):
+    a_inf, a_zero = limit(math.inf, p.include_inf), limit(0.0, p.include_zero)
+    for name, val, on in (("added_mass_inf", a_inf, p.include_inf),
+                          ("added_mass_zero", a_zero, p.include_zero)):
         if on and np.isnan(val).any():
             flags.append(f"{name} is NaN (not computable for this water depth/Green function)")
 
     pair = ("radiating_dof", "influenced_dof")
-    cbody_c = _capytaine_stiffness(body, dofs, resolution)
+    cbody = body.capytaine_body(dofs, lid=p.lid, **p.mesh)
     ds["added_mass_inf"] = (pair, a_inf)
     ds["added_mass_zero"] = (pair, a_zero)
-    ds["hydrostatic_stiffness"] = (pair, body.hydrostatic_stiffness(dofs))
-    ds["hydrostatic_stiffness_mesh"] = (pair, cbody_c)
-    ds["mass"] = (pair, body.mass_matrix(dofs))
-    units = {"added_mass": "kg", "radiation_damping": "N s/m", "excitation_force": "N/m",
-             "added_mass_inf": "kg", "added_mass_zero": "kg", "hydrostatic_stiffness": "N/m",
-             "hydrostatic_stiffness_mesh": "N/m", "mass": "kg"}
-    for name, unit in units.items():
-        ds[name].attrs["units"] = unit
+    # the body returns force-equation matrices M[influenced, radiating]: stored transposed
+    ds["hydrostatic_stiffness"] = (pair, body.hydrostatic_stiffness(dofs).T)
+    ds["hydrostatic_stiffness_mesh"] = (pair, _capytaine_stiffness(cbody, body))
+    ds["mass"] = (pair, body.mass_matrix(dofs).T)
+    for name in ("added_mass", "radiation_damping", "added_mass_inf", "added_mass_zero",
+                 "hydrostatic_stiffness", "hydrostatic_stiffness_mesh", "mass"):
+        kind = "hydrostatic_stiffness" if name == "hydrostatic_stiffness_mesh" else name
+        ds[name].attrs["units"] = pair_units_attr(kind, dofs)
+    exc_units = sorted({f"{force_unit(d)}/m" for d in dofs})
+    ds["excitation_force"].attrs["units"] = (
+        exc_units[0] if len(exc_units) == 1
+        else "per DOF (N/m for translations, N m/m for rotations)")
     ds["excitation_force"].attrs["description"] = (
         "Froude-Krylov + diffraction per unit wave amplitude at the origin; Capytaine's time "
         "convention F(t) = Re[F exp(-i omega t)]")
-    ds["hydrostatic_stiffness_mesh"].attrs["description"] = "Capytaine compute_hydrostatic_stiffness on the mesh"
+    ds["hydrostatic_stiffness"].attrs["description"] = (
+        "analytic where the geometry allows, about the reference point, including the weight "
+        "term -m g (z_G - z_O) in roll and pitch (hybridwsi.bodies.base)")
+    ds["hydrostatic_stiffness_mesh"].attrs["description"] = (
+        "Capytaine compute_hydrostatic_stiffness on the mesh (with the body's mass and centre "
+        "of mass)")
+    ds["mass"].attrs["description"] = "rigid-body mass matrix about the reference point"
     ds["omega"].attrs["units"] = "rad/s"
     ds["wave_direction"].attrs["units"] = "rad"
     flags += _quality_flags(ds)
     for f in flags:
-        warnings.warn(f"BEM coefficients: {f}", stacklevel=3)
-    n_hull, n_lid = _panel_counts(body, resolution, config["mesh"]["lid"])
+        warnings.warn(f"BEM coefficients: {f}", stacklevel=4)
+    n_lid = 0 if cbody.lid_mesh is None else int(cbody.lid_mesh.nb_faces)
     ds.attrs = {
         "source": "hybridwsi.hydro.bem.compute (Capytaine)",
-        "rho": body.rho, "g": body.g, "water_depth": depth,
-        "body": body.to_json(), "n_panels": n_hull, "n_lid_panels": n_lid,
-        "resolution": list(resolution), "method": config["solver"]["method"],
-        "symmetric": int(config["mesh"]["symmetric"]), "lid": int(config["mesh"]["lid"]),
-        "low_kh": config["solver"]["low_kh"],
-        "input_hash": input_hash, "inputs": json.dumps(config, sort_keys=True),
+        "rho": body.rho, "g": body.g, "water_depth": p.depth,
+        "body": body.to_json(), "n_panels": int(cbody.mesh.nb_faces), "n_lid_panels": n_lid,
+        "mesh": json.dumps(p.config["mesh"], sort_keys=True),
+        "reference_point": [float(v) for v in body.reference_point],
+        "method": p.method, "symmetric": int(p.symmetric), "lid": int(p.lid),
+        "low_kh": p.low_kh,
+        "input_hash": p.input_hash, "inputs": json.dumps(p.config, sort_keys=True),
         "hybridwsi_version": __version__, "capytaine_version": _pkg_version("capytaine"),
         "quality_flags": json.dumps(flags),
         "dropped_omega": json.dumps([float(w) for w in nan_w]),
@@ -647,7 +748,7 @@ def _assemble(store, omega, body, dofs, directions, depth, resolution, config, i
 
 
 def _join_depths(low: xr.Dataset | None, high: xr.Dataset, depth: float,
-                 deep_kh: float) -> xr.Dataset:
+                 deep_kh: float, input_hash: str) -> xr.Dataset:
     """Finite-depth coefficients below kh = ``deep_kh`` joined with deep-water ones above."""
     per_omega = ("added_mass", "radiation_damping", "excitation_force")
     if low is None:
@@ -665,8 +766,7 @@ def _join_depths(low: xr.Dataset | None, high: xr.Dataset, depth: float,
     ds.attrs.update(
         water_depth=depth, deep_water_kh=deep_kh,
         deep_water_above_omega=float(high["omega"].values.min()),
-        input_hash=_sha256([low.attrs["input_hash"] if low is not None else None,
-                            high.attrs["input_hash"], deep_kh]),
+        input_hash=input_hash,
         quality_flags=json.dumps(flags),
         note=(f"finite depth {depth} m below kh = {deep_kh}; deep water above "
               f"(omega >= {float(high['omega'].values.min()):.4g} rad/s) and for A_inf"),
@@ -691,13 +791,8 @@ def _quality_flags(ds: xr.Dataset) -> list[str]:
     return flags
 
 
-def _capytaine_stiffness(body: FloatingSphere, dofs, resolution) -> np.ndarray:
-    """Capytaine's mesh-integrated hydrostatic stiffness (works on the symmetric mesh)."""
-    cbody = body.capytaine_body(dofs, resolution=resolution, lid=False)
+def _capytaine_stiffness(cbody, body: Body) -> np.ndarray:
+    """Capytaine's mesh-integrated hydrostatic stiffness (works on the symmetric mesh), stored
+    as (radiating_dof, influenced_dof)."""
     c = cbody.compute_hydrostatic_stiffness(rho=body.rho, g=body.g)
     return np.asarray(c.transpose("radiating_dof", "influenced_dof").values, dtype=float)
-
-
-def _panel_counts(body: FloatingSphere, resolution, lid: bool) -> tuple[int, int]:
-    hull, lid_mesh = body.mesh(resolution, lid=lid)
-    return int(hull.nb_faces), int(0 if lid_mesh is None else lid_mesh.nb_faces)

@@ -1,29 +1,29 @@
-"""Floating bodies: geometry, mass properties, hydrostatics and Capytaine meshes.
+"""The paper's body: a rigid sphere floating in the free surface.
 
-The only body so far is :class:`FloatingSphere`, the paper's test case (a sphere floating with
-its centre at the still-water level). Coordinates: ``z`` up, origin on the undisturbed free
-surface above the sphere's centre (so a half-submerged sphere has its centre at the origin).
+Coordinates as every body (:mod:`hybridwsi.bodies.base`): ``z`` up, origin on the undisturbed
+free surface above the sphere's centre (a half-submerged sphere has its centre at the origin).
+The reference point (DOF origin) is the centre of mass, so the paper's BEM inputs, and with
+them the cache keys of the shipped coefficients, are those of the sphere-only code.
 
-Capytaine is imported lazily (only by :meth:`FloatingSphere.mesh` and
-:meth:`FloatingSphere.capytaine_body`) so that importing this module stays cheap.
-
-Capytaine 3 pitfalls handled here (``/work/shared/design/CAPYTAINE_NOTES.md``): the lid of an
-axisymmetric mesh is built from profile points, because ``generate_lid()`` returns an empty
-lid on a ``RotationSymmetricMesh``.
+Capytaine is imported lazily (only by :meth:`FloatingSphere.mesh`) so that importing this
+module stays cheap. The lid of the axisymmetric mesh is built from profile points, because
+``generate_lid()`` returns an empty lid on a ``RotationSymmetricMesh`` (CAPYTAINE_NOTES.md
+pitfall 1).
 """
 
 from __future__ import annotations
 
-import json
 import math
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
-from hybridwsi.dofs import RIGID_DOFS, check_dofs
+from hybridwsi.bodies.base import (HORIZONTAL_AND_HEAVE, Body, WaterplaneMoments,
+                                   as_tuple_matrix, check_panel_count, disc_lid, inertia_matrix,
+                                   positive, vector3)
 from hybridwsi.errors import InputError
+
 
 def cap_volume(depth: float | np.ndarray, radius: float) -> float | np.ndarray:
     """Volume [m^3] of a spherical cap of height ``depth`` [m] cut from a sphere of ``radius``."""
@@ -33,7 +33,7 @@ def cap_volume(depth: float | np.ndarray, radius: float) -> float | np.ndarray:
 
 
 @dataclass(frozen=True)
-class FloatingSphere:
+class FloatingSphere(Body):
     """A rigid sphere floating in the free surface.
 
     Parameters
@@ -55,6 +55,12 @@ class FloatingSphere:
         Water density [kg/m^3].
     g : float
         Gravitational acceleration [m/s^2].
+
+    Notes
+    -----
+    The reference point is the centre of mass; default DOFs ``("Heave",)``; the mesh
+    resolution is Capytaine's ``mesh_sphere`` ``(n_theta, n_phi)``, given directly, as a hull
+    panel count or as a panel size (:meth:`mesh_options`).
     """
 
     radius: float = 0.15
@@ -65,22 +71,26 @@ class FloatingSphere:
     rho: float = 998.2
     g: float = 9.81
 
+    # not dataclass fields: they stay out of to_dict() and so out of the BEM cache keys
+    name = "sphere"
+    dofs = ("Heave",)
+    default_panels = 6400
+
     def __post_init__(self) -> None:
-        r = _positive("radius", self.radius)
-        draft = r if self.draft is None else _positive("draft", self.draft)
+        r = positive("radius", self.radius)
+        draft = r if self.draft is None else positive("draft", self.draft)
         if not draft < 2.0 * r:
             raise InputError(f"draft {draft} m must be smaller than the diameter {2 * r} m")
-        rho, g = _positive("rho", self.rho), _positive("g", self.g)
-        mass = rho * cap_volume(draft, r) if self.mass is None else _positive("mass", self.mass)
-        cog = np.asarray(self.center_of_mass, dtype=float)
-        if cog.shape != (3,) or not np.all(np.isfinite(cog)):
-            raise InputError(f"center_of_mass must be 3 finite numbers [m], got {self.center_of_mass}")
-        inertia = _inertia_matrix(self.inertia, mass, r)
+        rho, g = positive("rho", self.rho), positive("g", self.g)
+        mass = rho * cap_volume(draft, r) if self.mass is None else positive("mass", self.mass)
+        cog = vector3("center_of_mass", self.center_of_mass)
+        inertia = (np.eye(3) * 0.4 * mass * r**2 if self.inertia is None  # uniform solid sphere
+                   else inertia_matrix("inertia", self.inertia))
         # frozen dataclass: normalised values are written once here
         for name, value in (("radius", r), ("draft", draft), ("mass", mass), ("rho", rho), ("g", g),
-                            ("center_of_mass", tuple(float(c) for c in cog))):
+                            ("center_of_mass", cog)):
             object.__setattr__(self, name, value)
-        object.__setattr__(self, "inertia", tuple(map(tuple, inertia.tolist())))
+        object.__setattr__(self, "inertia", as_tuple_matrix(inertia))
 
     # ------------------------------------------------------------------ presets
     @classmethod
@@ -95,24 +105,12 @@ class FloatingSphere:
         return cls(radius=0.15, mass=7.056, center_of_mass=(0.0, 0.0, -0.0348),
                    inertia=(0.098252, 0.098252, 0.073052), rho=998.2, g=9.82)
 
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> FloatingSphere:
-        """Inverse of :meth:`to_dict`."""
-        data = {k: v for k, v in dict(data).items() if k != "type"}
-        try:
-            return cls(**data)
-        except TypeError as exc:
-            raise InputError(f"cannot build a FloatingSphere from {data}: {exc}") from None
-
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able description (used for hashing and NetCDF attrs)."""
         d = asdict(self)
         d["center_of_mass"] = list(self.center_of_mass)
         d["inertia"] = [list(row) for row in self.inertia]
         return {"type": "FloatingSphere", **d}
-
-    def to_json(self) -> str:
-        return json.dumps(self.to_dict(), sort_keys=True)
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -126,54 +124,57 @@ class FloatingSphere:
         return tuple(c + o for c, o in zip(self.center, self.center_of_mass))
 
     @property
+    def inertia_about_cog(self) -> np.ndarray:
+        """Inertia tensor about the centre of mass [kg m^2]."""
+        return np.asarray(self.inertia, dtype=float)
+
+    @property
+    def reference_point(self) -> tuple[float, float, float]:
+        """The centre of mass [m] (the paper's DOF origin)."""
+        return self.cog
+
+    @property
     def waterplane_radius(self) -> float:
         """Radius of the waterplane circle [m]."""
         zc = self.radius - self.draft
         return math.sqrt(self.radius**2 - zc**2)
 
+    def waterplane_moments(self) -> WaterplaneMoments:
+        """Waterplane circle of radius a: area pi a^2, second moments pi a^4 / 4."""
+        a = self.waterplane_radius
+        return WaterplaneMoments(area=math.pi * a**2, sxx=math.pi * a**4 / 4,
+                                 syy=math.pi * a**4 / 4)
+
     def displaced_volume(self) -> float:
         """Submerged volume at rest [m^3] (spherical cap of height ``draft``)."""
         return cap_volume(self.draft, self.radius)
 
-    def center_of_buoyancy(self) -> float:
-        """Vertical position of the centre of buoyancy in the global frame [m] (negative)."""
+    def center_of_buoyancy(self) -> np.ndarray:
+        """Centre of buoyancy in the global frame [m] (on the vertical axis, z < 0)."""
         d, r = self.draft, self.radius
         # centroid of a cap of height d, measured from the sphere centre: 3(2R - d)^2 / (4(3R - d))
-        return self.center[2] - 3.0 * (2.0 * r - d) ** 2 / (4.0 * (3.0 * r - d))
+        return np.array([0.0, 0.0, self.center[2] - 3.0 * (2.0 * r - d) ** 2 / (4.0 * (3.0 * r - d))])
 
-    # ------------------------------------------------------------------ hydrostatics
-    def hydrostatic_stiffness(self, dofs: Sequence[str] = ("Heave",)) -> np.ndarray:
-        """Analytic linear hydrostatic stiffness matrix [N/m, N, N m/rad] for ``dofs``.
+    def wetted_area(self) -> float:
+        """Area of the wetted spherical cap, 2 pi R draft [m^2]."""
+        return 2.0 * math.pi * self.radius * self.draft
 
-        Heave: ``rho g A_wp`` (``rho g pi R^2`` when half submerged). Roll/pitch about the centre
-        of mass: ``rho g (I_wp + V z_B) - m g z_G`` with z from the still-water level. Surge, sway
-        and yaw have no restoring force; heave-roll/pitch couplings vanish by axial symmetry.
-        """
-        dofs = check_dofs(dofs)
-        a = self.waterplane_radius
-        rg = self.rho * self.g
-        diag = {
-            "Heave": rg * math.pi * a**2,
-            "Roll": rg * (math.pi * a**4 / 4 + self.displaced_volume() * self.center_of_buoyancy())
-            - self.mass * self.g * self.cog[2],
-        }
-        diag["Pitch"] = diag["Roll"]
-        return np.diag([diag.get(d, 0.0) for d in dofs])
+    # ------------------------------------------------------------------ exact hydrostatics
+    @property
+    def exact_restoring_dofs(self) -> tuple[str, ...]:
+        return HORIZONTAL_AND_HEAVE
 
-    def buoyancy_force(self, z: float | np.ndarray) -> float | np.ndarray:
-        """Exact (nonlinear) net vertical hydrostatic force [N] at heave displacement ``z`` [m].
+    def submerged_volume(self, heave: float | np.ndarray) -> float | np.ndarray:
+        """Spherical-cap volume [m^3] below the still-water level after a heave ``heave`` [m].
 
-        ``F(z) = rho g V_sub(draft - z) - m g`` with the spherical-cap volume, so
-        ``F(0) = rho g V_sub - m g`` (zero for a body in equilibrium) and ``dF/dz(0) = -C_33``.
-        Valid while the sphere is partly submerged: ``draft - 2R <= z <= draft`` (``|z| <= R``
-        for a half-submerged sphere).
+        Valid while the sphere is partly submerged: ``draft - 2R <= heave <= draft``.
 
         Raises
         ------
         InputError
-            If any ``z`` is outside that range or not finite.
+            If any ``heave`` is outside that range or not finite.
         """
-        zz = np.asarray(z, dtype=float)
+        zz = np.asarray(heave, dtype=float)
         lo, hi = self.draft - 2.0 * self.radius, self.draft
         if not np.all(np.isfinite(zz)) or np.any(zz < lo - 1e-12) or np.any(zz > hi + 1e-12):
             bad = zz[~(np.isfinite(zz) & (zz >= lo - 1e-12) & (zz <= hi + 1e-12))].ravel()[0]
@@ -181,32 +182,45 @@ class FloatingSphere:
                 f"heave displacement z = {bad:.6g} m is outside [{lo:.6g}, {hi:.6g}] m where the "
                 "sphere is partly submerged; the spherical-cap buoyancy is not defined there"
             )
-        depth = np.clip(self.draft - zz, 0.0, 2.0 * self.radius)
-        force = self.rho * self.g * cap_volume(depth, self.radius) - self.mass * self.g
-        return float(force) if np.ndim(force) == 0 else force
+        return cap_volume(np.clip(self.draft - zz, 0.0, 2.0 * self.radius), self.radius)
 
-    # ------------------------------------------------------------------ mass
-    def mass_matrix(self, dofs: Sequence[str] = ("Heave",)) -> np.ndarray:
-        """Rigid-body mass matrix [kg, kg m^2] about the centre of mass for ``dofs``."""
-        dofs = check_dofs(dofs)
-        full = np.zeros((6, 6))
-        full[:3, :3] = np.eye(3) * self.mass
-        full[3:, 3:] = np.asarray(self.inertia)
-        idx = [RIGID_DOFS.index(d) for d in dofs]
-        return full[np.ix_(idx, idx)]
+    def buoyancy_force(self, z: float | np.ndarray) -> float | np.ndarray:
+        """Exact (nonlinear) net vertical hydrostatic force [N] at heave displacement ``z`` [m].
+
+        ``F(z) = rho g V_sub(draft - z) - m g`` with the spherical-cap volume, so
+        ``F(0) = rho g V_sub - m g`` (zero for a body in equilibrium) and ``dF/dz(0) = -C_33``.
+        Valid while the sphere is partly submerged: ``draft - 2R <= z <= draft``
+        (``|z| <= R`` for a half-submerged sphere); :class:`InputError` outside.
+        """
+        return super().buoyancy_force(z)
 
     # ------------------------------------------------------------------ meshes
+    def mesh_options(self, panel_size: float | None = None, n_panels: int | None = None,
+                     resolution: tuple[int, int] | int | None = None) -> dict[str, Any]:
+        """Canonical mesh options ``{"resolution": (n_theta, n_phi)}`` from at most one of a
+        panel size [m], a hull panel count or a resolution (default 6400 hull panels)."""
+        given = [v is not None for v in (panel_size, n_panels, resolution)]
+        if sum(given) > 1:
+            raise InputError("give one of panel_size, n_panels and resolution for the sphere mesh")
+        if panel_size is not None:
+            # square-ish panels: pi R / (2k) along the meridian and around the equator
+            k = max(2, math.ceil(math.pi * self.radius / (2.0 * positive("panel_size", panel_size))))
+            return {"resolution": (2 * k, 4 * k)}
+        return {"resolution": self.panel_resolution(n_panels if resolution is None else resolution)}
+
+    def mesh_description(self, **options: Any) -> dict[str, Any]:
+        """``{"kind": "mesh_sphere", "resolution": [n_theta, n_phi]}`` (the paper's cache key)."""
+        return {"kind": "mesh_sphere", "resolution": list(self.mesh_options(**options)["resolution"])}
+
     def resolution_for(self, n_panels: int) -> tuple[int, int]:
         """Capytaine ``mesh_sphere`` resolution ``(n_theta, n_phi)`` (full sphere) giving about
         ``n_panels`` square-ish hull panels on a half-submerged sphere: ``n_phi = 2 n_theta``,
         hull panels ``= n_theta/2 * n_phi`` (6400 -> (80, 160), 1600 -> (40, 80))."""
-        if int(n_panels) != n_panels or n_panels < 16:
-            raise InputError(f"n_panels must be an integer >= 16, got {n_panels}")
-        k = max(2, round(math.sqrt(n_panels / 4.0)))
+        k = max(2, round(math.sqrt(check_panel_count(n_panels) / 4.0)))
         return (2 * k, 4 * k)
 
     def mesh(self, resolution: tuple[int, int] | int | None = None, *, symmetric: bool = True,
-             lid: bool = True):
+             lid: bool = True, panel_size: float | None = None, n_panels: int | None = None):
         """Capytaine mesh of the wetted hull and (optionally) a lid on the waterplane.
 
         Parameters
@@ -219,6 +233,8 @@ class FloatingSphere:
             False returns plain merged meshes.
         lid : bool
             Add a lid (for irregular-frequency removal) built from profile points.
+        panel_size, n_panels : optional
+            Instead of ``resolution`` (:meth:`mesh_options`).
 
         Returns
         -------
@@ -226,42 +242,26 @@ class FloatingSphere:
         """
         import capytaine as cpt
 
-        nth, nph = self.panel_resolution(resolution)
+        opts = self.mesh_options(panel_size=panel_size, n_panels=n_panels, resolution=resolution)
+        nth, nph = opts["resolution"]
         hull = cpt.mesh_sphere(radius=self.radius, center=self.center, resolution=(nth, nph),
                                axial_symmetry=True).immersed_part()
         lid_mesh = None
         if lid:
             # half the hull's meridian density is enough on the lid (notes: same result)
             n_radial = max(2, round(nth / 4 * self.waterplane_radius / self.radius))
-            pts = np.array([(r, 0.0, 0.0) for r in np.linspace(0.0, self.waterplane_radius,
-                                                                 n_radial + 1)])
-            lid_mesh = cpt.RotationSymmetricMesh.from_profile_points(pts, n=nph)
-            lid_mesh = lid_mesh.with_normal_vector_going_down()
+            lid_mesh = disc_lid(self.waterplane_radius, n_radial, nph)
         if not symmetric:
             hull = hull.merged()
             lid_mesh = None if lid_mesh is None else lid_mesh.merged()
         return hull, lid_mesh
 
-    def capytaine_body(self, dofs: Sequence[str] = ("Heave",), *,
-                       resolution: tuple[int, int] | int | None = None, symmetric: bool = True,
-                       lid: bool = True):
-        """A ``capytaine.FloatingBody`` with rigid-body ``dofs`` about the centre of mass."""
-        import capytaine as cpt
-
-        dofs = check_dofs(dofs)
-        hull, lid_mesh = self.mesh(resolution, symmetric=symmetric, lid=lid)
-        kwargs = {} if lid_mesh is None else {"lid_mesh": lid_mesh}
-        return cpt.FloatingBody(
-            mesh=hull, dofs=cpt.rigid_body_dofs(only=list(dofs), rotation_center=self.cog),
-            center_of_mass=self.cog, mass=self.mass, name="sphere", **kwargs,
-        )
-
     def panel_resolution(self, resolution: tuple[int, int] | int | None) -> tuple[int, int]:
         """Normalise a resolution: None (6400 panels), a panel count or ``(n_theta, n_phi)``."""
         if resolution is None:
-            return self.resolution_for(6400)
+            return self.resolution_for(self.default_panels)
         if np.ndim(resolution) == 0:
-            return self.resolution_for(int(resolution))
+            return self.resolution_for(resolution)
         try:
             nth, nph = (int(v) for v in resolution)
         except (TypeError, ValueError):
@@ -270,23 +270,3 @@ class FloatingSphere:
             raise InputError(f"resolution (n_theta, n_phi) = {resolution}: need n_theta even >= 4 and n_phi >= 4")
         return nth, nph
 
-
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{name} must be positive and finite, got {value!r}")
-    return v
-
-
-def _inertia_matrix(inertia: Any, mass: float, radius: float) -> np.ndarray:
-    if inertia is None:
-        return np.eye(3) * 0.4 * mass * radius**2  # uniform solid sphere
-    arr = np.asarray(inertia, dtype=float)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    if arr.shape != (3, 3) or not np.all(np.isfinite(arr)):
-        raise InputError(f"inertia must be 3 diagonal values or a 3x3 matrix [kg m^2], got {inertia}")
-    return arr
