@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.forces import KnownComponent
+from hybridwsi.forces import ExactHydrostatic, KnownComponent
 from hybridwsi.waves import Wave, excitation_force, wave_from_dict
 
 
@@ -60,8 +60,6 @@ def split_components(forces: Sequence[KnownComponent] | None
         raise InputError(f"forces must be hybridwsi.forces.KnownComponent objects (e.g. "
                          f"ConstantForce, PrescribedForce.from_series, LinearDamping); got "
                          f"{', '.join(bad)}")
-    from hybridwsi.forces import ExactHydrostatic
-
     if any(isinstance(c, ExactHydrostatic) for c in comps):
         raise InputError("pass nonlinear_hydrostatics=True (with body=) instead of an "
                          "ExactHydrostatic force: it replaces −C z rather than adding to it")
