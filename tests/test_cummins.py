@@ -13,6 +13,7 @@ import xarray as xr
 import synthetic_hydro as sh
 from hybridwsi import cummins
 from hybridwsi.errors import InputError
+from hybridwsi.forces import ConstantForce, ExactHydrostatic, LinearDamping, PrescribedForce
 from hybridwsi.history import read_netcdf, to_netcdf, validate
 from hybridwsi.waves import JONSWAP, Regular
 
@@ -85,9 +86,10 @@ def test_newmark_convolution_is_second_order_for_zero_kernel(co):
 
 @pytest.mark.parametrize("radiation", ["statespace", "convolution"])
 def test_total_force_is_mass_times_acceleration(co, kern, radiation):
+    ts = np.linspace(0.0, 4.0, 4001)
     h = cummins.simulate(co, duration=4.0, dt=0.01, wave=JONSWAP(0.05, 0.8, seed=3),
-                         external_force=lambda t: 2.0 * np.sin(3 * t), z0=0.01, irf=kern,
-                         radiation=radiation, ramp=1.0)
+                         forces=[PrescribedForce.from_series(ts, 2.0 * np.sin(3 * ts))],
+                         z0=0.01, irf=kern, radiation=radiation, ramp=1.0)
     validate(h)
     m = float(h.mass.values[0, 0])
     np.testing.assert_allclose(h.F_tot.values, m * h.zddot.values, atol=1e-12 * 50)
@@ -99,16 +101,19 @@ def test_total_force_is_mass_times_acceleration(co, kern, radiation):
     inputs = json.loads(h.attrs["inputs"])
     assert inputs["coeffs_hash"] == "synthetic-v1" and inputs["wave"]["type"] == "jonswap"
     assert inputs["dt"] == 0.01 and inputs["radiation"] == radiation
+    assert inputs["forces"][0].startswith("prescribed(external: 4001 samples")
+    np.testing.assert_allclose(h.F_ext.values[:, 0], 2.0 * np.sin(3 * h.time.values), atol=1e-4)
 
 
 def test_constant_force_gives_static_offset_and_series_forms_agree(co, kern):
     f0 = 10.0
-    h = cummins.simulate(co, duration=20.0, dt=0.01, external_force=f0, irf=kern)
+    h = cummins.simulate(co, duration=20.0, dt=0.01, forces=[ConstantForce(f0)], irf=kern)
     assert h.z.values[-1, 0] == pytest.approx(f0 / sh.C, rel=1e-4)  # static: C z = F
     t = h.time.values
-    series = cummins.simulate(co, duration=20.0, dt=0.01, irf=kern,
-                              external_force=(np.array([0.0, 20.0]), np.array([f0, f0])))
-    arr = cummins.simulate(co, duration=20.0, dt=0.01, irf=kern, external_force=np.full(t.size, f0))
+    series = cummins.simulate(co, duration=20.0, dt=0.01, irf=kern, forces=[
+        PrescribedForce.from_series(np.array([0.0, 20.0]), np.array([f0, f0]))])
+    arr = cummins.simulate(co, duration=20.0, dt=0.01, irf=kern,
+                           forces=[PrescribedForce.from_series(t, np.full(t.size, f0))])
     np.testing.assert_allclose(series.z.values, h.z.values, atol=1e-14)
     np.testing.assert_allclose(arr.F_ext.values, f0)
 
@@ -118,7 +123,7 @@ def test_state_dependent_force_is_a_damped_oscillator(co):
     b, z0 = 5.0, 0.02
     mt = sh.M + sh.A_INF
     h = cummins.simulate(co, duration=3.0, dt=0.005, z0=z0, radiation="none",
-                         external_force=lambda t, z, zdot: -b * zdot)
+                         forces=[LinearDamping(b)])
     wn = np.sqrt(sh.C / mt)
     zeta = b / (2 * mt * wn)
     wd = wn * np.sqrt(1 - zeta**2)
@@ -132,7 +137,7 @@ def test_state_dependent_force_is_a_damped_oscillator(co):
 def test_batch_equals_individual_runs(co, kern):
     cases = [{"z0": 0.02}, {"wave": Regular(0.8, 0.04)},
              {"wave": {"type": "jonswap", "hs": 0.03, "tp": 0.9, "seed": 1},
-              "external_force": 1.5}]
+              "forces": [ConstantForce(1.5)]}]
     kw = dict(duration=3.0, dt=0.01, irf=kern)
     batch = cummins.simulate_batch(co, cases, **kw)
     assert batch.z.dims == ("case", "time", "dof") and batch.sizes["case"] == 3
@@ -163,8 +168,13 @@ def test_netcdf_round_trip_keeps_inputs(co, kern, tmp_path):
         ({"duration": 0.001}, "duration"),
         ({"radiation": "fft"}, "radiation must be"),
         ({"nonlinear_hydrostatics": True}, "body"),
-        ({"external_force": np.ones(7)}, "samples"),
-        ({"external_force": (np.array([0.0, 0.5]), np.array([1.0, 1.0]))}, "covers"),
+        (lambda: {"forces": [PrescribedForce.from_series(np.arange(2.0), np.ones(7))]},
+         "samples"),
+        ({"forces": [PrescribedForce.from_series(np.array([0.0, 0.5]), np.ones(2))]}, "covers"),
+        ({"forces": [lambda t: 1.0]}, "KnownComponent"),
+        ({"forces": [ConstantForce([1.0, 2.0])]}, "one value per DOF"),
+        ({"forces": [PrescribedForce("F_exc")]}, "read it from the history"),
+        ({"forces": [LinearDamping(1.0)], "radiation": "convolution"}, "statespace"),
         ({"z0": float("nan")}, "z0"),
         ({"dofs": ["Pitch"]}, "no DOF"),
         ({"mass": -20.0}, "positive definite"),
@@ -172,8 +182,8 @@ def test_netcdf_round_trip_keeps_inputs(co, kern, tmp_path):
 )
 def test_bad_input(co, kern, kwargs, match):
     base = dict(duration=1.0, dt=0.01, irf=kern)
-    base.update(kwargs)
     with pytest.raises(InputError, match=match):
+        base.update(kwargs() if callable(kwargs) else kwargs)  # a bad component fails early
         cummins.simulate(co, **base)
 
 
@@ -292,3 +302,27 @@ def test_cli_simulate_writes_a_history(co, tmp_path, capsys):
     assert json.loads(h.attrs["inputs"])["wave"]["period"] == 0.8
     rc = main(["simulate", "--coeffs", str(coeffs), "--dt", "-1", "--out", str(out)])
     assert rc == 2 and "dt must be > 0" in capsys.readouterr().err
+
+
+def test_exact_hydrostatic_is_not_a_force_to_add(co, kern, sphere):
+    with pytest.raises(InputError, match="nonlinear_hydrostatics"):
+        cummins.simulate(co, duration=1.0, dt=0.01, irf=kern,
+                         forces=[ExactHydrostatic(sphere, ["Heave"])])
+
+
+def test_cli_force_file_is_read_by_column_name(co, tmp_path):
+    from hybridwsi.cli import main
+
+    coeffs = to_netcdf(co, tmp_path / "coeffs.nc")
+    csv = tmp_path / "force.csv"
+    # the force is not the second column, and its unit is kN
+    csv.write_text("# made by hand\ntime [s];eta [m];F_ext [kN]\n0;9;0\n2;9;0.004\n")
+    out = tmp_path / "hist.nc"
+    rc = main(["simulate", "--coeffs", str(coeffs), "--force", str(csv), "--duration", "2",
+               "--dt", "0.01", "--out", str(out), "--quiet"])
+    assert rc == 0
+    np.testing.assert_allclose(read_netcdf(out).F_ext.values[:, 0],
+                               2.0 * read_netcdf(out).time.values, atol=1e-12)
+    csv.write_text("time,eta,moment\n0,1,2\n2,1,2\n")
+    assert main(["simulate", "--coeffs", str(coeffs), "--force", str(csv), "--duration", "2",
+                 "--out", str(out), "--quiet"]) == 2

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 
 HELP = "time-domain Cummins simulation (decay, regular or JONSWAP waves, external force)"
 DESCRIPTION = (
@@ -38,13 +37,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ramp", type=float, default=None,
                    help="excitation ramp [s] (default: 2 wave periods with waves, else 0)")
     p.add_argument("--force", metavar="CSV",
-                   help="external force: CSV with columns time [s], force [N] (header allowed)")
+                   help="external force: CSV/text table with a 'time [s]' column and a force column "
+                        "named F, F_ext or force (unit in the header, e.g. 'F_ext [kN]'; "
+                        "default N); interpolated linearly, must cover the run")
     p.add_argument("--duration", type=float, default=30.0, help="simulated time [s] (30)")
     p.add_argument("--dt", type=float, default=0.01, help="time step [s] (0.01)")
     p.add_argument("--radiation", choices=("statespace", "convolution", "none"),
                    default="statespace", help="memory-term evaluation (statespace)")
     p.add_argument("--nonlinear-hydrostatics", action="store_true",
-                   help="exact spherical-cap buoyancy instead of -C z")
+                   help="exact hydrostatic force of the body (heave of the sphere: spherical "
+                        "cap) instead of -C z on the DOFs the body can do exactly")
     p.add_argument("--out", required=True, metavar="HIST.nc", help="output TimeHistory NetCDF")
     p.add_argument("--quiet", action="store_true", help="no progress output")
 
@@ -76,30 +78,28 @@ def _body(coeffs):
     return FloatingSphere.from_dict(json.loads(raw)) if raw else FloatingSphere.paper()
 
 
-def _force_csv(path: str):
-    import numpy as np
-    import pandas as pd
+#: accepted names of the force column of a ``--force`` file (case-insensitive, unit allowed)
+FORCE_COLUMNS = ("F", "F_ext", "force")
 
+
+def _force_csv(path: str, dof: str = "Heave"):
+    """``PrescribedForce.from_series`` from a text table with a ``time`` column [s] and a force
+    column named ``F``, ``F_ext`` or ``force`` (units from the header, e.g. ``F_ext [kN]``;
+    N by default, N m for a rotation DOF)."""
     from hybridwsi.errors import InputError
+    from hybridwsi.forces import PrescribedForce
+    from hybridwsi.history import TextTable, quantity_of
 
-    if not Path(path).is_file():
-        raise InputError(f"file not found: {path}")
-    try:
-        df = pd.read_csv(path, sep=None, engine="python")
-        if not np.issubdtype(df.dtypes.iloc[0], np.number):  # no header row
-            raise ValueError("first column is not numeric")
-    except Exception:  # retry without header (pandas raises many types on odd files)
-        try:
-            df = pd.read_csv(path, sep=None, engine="python", header=None)
-        except Exception as exc:
-            raise InputError(f"cannot read {path} as CSV: {exc}") from None
-    data = df.apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
-    if data.ndim != 2 or data.shape[1] < 2:
-        raise InputError(f"{path}: need two columns, time [s] and force [N]")
-    if not np.all(np.isfinite(data[:, :2])):
-        row = int(np.flatnonzero(~np.isfinite(data[:, :2]).all(axis=1))[0])
-        raise InputError(f"{path}: non-numeric or missing value at data row {row}")
-    return data[:, 0], data[:, 1]
+    table = TextTable(path)
+    found = [c for c in (table.find(name) for name in FORCE_COLUMNS) if c is not None]
+    if len(set(found)) != 1:
+        what = "no force column" if not found else f"several force columns {sorted(set(found))}"
+        raise InputError(f"{table.path.name}: {what}; name one column {' or '.join(FORCE_COLUMNS)} "
+                         f"(columns: {', '.join(table.columns)})")
+    t = table.numeric(table.require("time"), "time")
+    table.check_time(t, min_samples=2)
+    force = table.numeric(found[0], quantity_of("force", dof))
+    return PrescribedForce.from_series(t, force, name=f"{table.path.name}:{found[0]}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         ramp = 0.0 if wave is None else 2.0 * (args.regular[0] if args.regular else args.jonswap[1])
     hist = cummins.simulate(
         coeffs, mass=args.mass, duration=args.duration, dt=args.dt, wave=wave, z0=args.decay,
-        external_force=_force_csv(args.force) if args.force else None,
+        forces=[_force_csv(args.force)] if args.force else [],
         radiation=args.radiation, nonlinear_hydrostatics=args.nonlinear_hydrostatics,
         body=_body(coeffs) if args.nonlinear_hydrostatics else None, ramp=ramp,
         progress=not args.quiet,

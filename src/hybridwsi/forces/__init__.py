@@ -12,6 +12,8 @@ from hybridwsi.forces.base import (
     summed_linear_coefficients,
     total_known_force,
 )
+from hybridwsi.forces.external import ConstantForce, PrescribedForce
+from hybridwsi.forces.hydrostatics import ExactHydrostatic
 from hybridwsi.forces.linear import (
     REGISTRY,
     AddedMass,
@@ -26,6 +28,6 @@ from hybridwsi.forces.radiation import RadiationMemory
 __all__ = [
     "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
-    "QuadraticDamping", "parse_known", "RadiationMemory", "MooringForce", "MooringLines",
-    "MooringSystem", "MooringTable",
+    "QuadraticDamping", "parse_known", "RadiationMemory", "ConstantForce", "PrescribedForce",
+    "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
 ]

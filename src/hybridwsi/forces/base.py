@@ -54,6 +54,10 @@ class KnownComponent(ABC):
     name: str = "component"
     #: number of internal ODE states (0 for memoryless components)
     n_states: int = 0
+    #: True when the force depends on time only (not on z, ż, z̈ or internal states): a
+    #: generator evaluates it once on its time grid (:meth:`time_force`) and keeps its
+    #: linear solver
+    time_only: bool = False
 
     @abstractmethod
     def force(self, hist: xr.Dataset) -> np.ndarray:
@@ -77,6 +81,15 @@ class KnownComponent(ABC):
     def initial_state(self, hist: xr.Dataset) -> np.ndarray:
         """Internal states at the first sample of ``hist`` (zeros: start from rest)."""
         return np.zeros(self.n_states)
+
+    def time_force(self, t: np.ndarray, n_dof: int | None = None) -> np.ndarray:
+        """Force [N, N m per DOF] at times ``t`` [s], shape (nt, n_dof); time-only components.
+
+        ``n_dof`` is the number of DOFs of the run (needed where the component alone cannot
+        tell, e.g. a scalar constant); None keeps the component's own width.
+        """
+        raise InputError(f"force component '{self.describe()}' depends on the motion, not on "
+                         "time only; it has no time series")
 
     def describe(self) -> str:
         return self.name
