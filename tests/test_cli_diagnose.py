@@ -21,7 +21,7 @@ from hybridwsi.commands.diagnose import EXAMPLE, example_history
 
 DATA = Path(__file__).parent / "data"
 BAD = DATA / "bad"
-M, A, C = EXAMPLE["mass_kg"], EXAMPLE["added_mass_kg"], EXAMPLE["stiffness_N_per_m"]
+M, A, C = EXAMPLE["mass_kg"], EXAMPLE["added_mass_inf_kg"], EXAMPLE["stiffness_N_per_m"]
 CASE3 = ["--known", f"hydrostatic={C}", "--known", f"added_mass={A}"]
 
 BAD_FILES = [
@@ -57,6 +57,8 @@ def test_bad_corpus_through_import(name, capsys, tmp_path):
     ["diagnose"],  # neither FILE nor --example
     ["diagnose", "--example", "--known", "hydrostatic"],
     ["diagnose", "--example", "--known", "spring=3"],
+    ["diagnose", "--example", "--known", "quadratic_damping"],  # has no matrix to read
+    ["diagnose", "--example", "--known", "hydrostatic", "--coeffs", str(BAD / "fake.nc")],
     ["diagnose", "--example", "--force", "F_nope"],
     ["diagnose", "--example", "--mass", "-1"],
     ["diagnose", "--example", "--dt", "0"],
@@ -109,6 +111,17 @@ def test_example_case1_and_case3_json(tmp_path, capsys):
     assert res3["gamma"] == pytest.approx(C, rel=1e-9)
     assert res3["input"]["known"] == [f"hydrostatic={C}", f"added_mass={A}"]
     assert {r["setting"] for r in res3["stability"]} >= {"prescribed_force", "loosely_coupled"}
+
+
+def test_known_added_mass_inf_and_its_alias_agree(tmp_path):
+    outs = []
+    for name in ("added_mass_inf", "added_mass"):
+        out = tmp_path / f"{name}.json"
+        assert main(["diagnose", "--example", "--known", f"hydrostatic={C}", "--known",
+                     f"{name}={A}", "--json", str(out)]) == 0
+        outs.append(json.loads(out.read_text()))
+    assert outs[0]["alpha"] == outs[1]["alpha"] == pytest.approx(M + A, rel=1e-9)
+    assert outs[0]["known"] == outs[1]["known"] == [f"hydrostatic={C}", f"added_mass_inf={A}"]
 
 
 def test_diagnose_csv_with_estimated_derivatives(tmp_path, capsys):

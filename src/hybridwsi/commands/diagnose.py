@@ -34,7 +34,7 @@ DESCRIPTION = (
 #: the built-in example: the paper's sphere (m, A_inf, C) with a small linear damping
 EXAMPLE = {
     "mass_kg": 7.06,
-    "added_mass_kg": 3.50,
+    "added_mass_inf_kg": 3.50,
     "stiffness_N_per_m": 692.2,
     "damping_Ns_per_m": 5.0,
     "periods_s": [0.6, 0.75, 1.1],
@@ -57,12 +57,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     for name, what in (("time", "time [s]"), ("z", "displacement [m]"),
                        ("zdot", "velocity [m/s]"), ("zddot", "acceleration [m/s^2]")):
         parser.add_argument(f"--{name}", metavar="COL", help=f"CSV column holding {what}")
-    parser.add_argument("--known", action="append", default=[], metavar="NAME=VALUE",
+    parser.add_argument("--known", action="append", default=[], metavar="NAME[=VALUE]",
                         help="known component removed from the force with its physical sign: "
-                        "hydrostatic=C [N/m], added_mass=A [kg], damping=B [N s/m], "
-                        "quadratic_damping=Bq (repeatable)")
+                        "hydrostatic=C [N/m], added_mass_inf=A [kg] (alias added_mass), "
+                        "linear_damping=B [N s/m] (alias damping), quadratic_damping=Bq; "
+                        "'hydrostatic' and 'added_mass_inf' without a value take their "
+                        "matrix from the history or from --coeffs (repeatable)")
+    parser.add_argument("--coeffs", metavar="FILE",
+                        help="coefficient file (NetCDF from 'hybridwsi bem') supplying C, A_inf "
+                        "and the mass for the history's DOFs")
     parser.add_argument("--mass", type=float, metavar="M",
-                        help="body mass [kg] (enables the stability assessment)")
+                        help="body mass [kg] (default: the history's, else --coeffs'; enables "
+                        "the stability assessment)")
     parser.add_argument("--fix-alpha", type=float, metavar="A",
                         help="fix alpha [kg] (e.g. m + A_inf) and regress only beta, gamma")
     parser.add_argument("--dt", type=float, metavar="DT",
@@ -84,14 +90,14 @@ def example_history() -> xr.Dataset:
     0.6, 0.75 and 1.1 s; see :data:`EXAMPLE`). The steady-state response is exact (complex
     amplitude ``F_k / (C − (m + A) ω_k² + i B ω_k)`` per harmonic), so z, ż, z̈ carry no
     integration or differentiation error. ``F_tot = m z̈`` is the total force (paper Eq. 2) and
-    ``F_exc`` the excitation. With ``--known hydrostatic=692.2 --known added_mass=3.5`` the
+    ``F_exc`` the excitation. With ``--known hydrostatic=692.2 --known added_mass_inf=3.5`` the
     regression of ``F_tot`` returns α = m + A, β = 0, γ = C (THEORY.md §1, case 3); with no known
     component α = m, β = γ = 0 (case 1). Three frequencies make the split identifiable.
     """
     from hybridwsi.history import make_history
 
     p = EXAMPLE
-    m, a, b, c = (p["mass_kg"], p["added_mass_kg"], p["damping_Ns_per_m"],
+    m, a, b, c = (p["mass_kg"], p["added_mass_inf_kg"], p["damping_Ns_per_m"],
                   p["stiffness_N_per_m"])
     t = np.arange(0.0, p["duration_s"], p["dt_s"])
     z = np.zeros_like(t, dtype=complex)
@@ -160,12 +166,40 @@ def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr
     return hist
 
 
-def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namespace,
-               notes: list[str]) -> list[dict[str, Any]] | None:
-    """Stability reports as dicts, or None without a mass."""
-    from hybridwsi.history import mass_matrix
+def _coefficients(args: argparse.Namespace) -> xr.Dataset | None:
+    """The ``--coeffs`` Dataset, or None."""
+    from hybridwsi.history import read_netcdf
 
-    mass = args.mass if args.mass is not None else mass_matrix(hist)
+    return read_netcdf(args.coeffs) if args.coeffs else None
+
+
+def _known(specs: list[str], hist: xr.Dataset | None, coeffs: xr.Dataset | None) -> list:
+    """Components of ``--known``: ``NAME=VALUE`` as given, a bare ``NAME`` from the history's
+    matrices or the coefficients (:func:`hybridwsi.forces.linear.known_from`). Without a
+    history only the names are checked (fail fast) and the bare ones are left out."""
+    from hybridwsi.forces.linear import FROM_DATA, canonical_name, known_from, parse_known
+
+    out = []
+    for spec in specs:
+        if "=" in spec:
+            out.append(parse_known(spec))
+            continue
+        name = canonical_name(spec)
+        if name not in FROM_DATA:
+            raise InputError(f"--known {name} needs a value ({name}=VALUE); only "
+                             f"{', '.join(FROM_DATA)} can be read from a history or --coeffs")
+        if hist is not None:
+            out += known_from(hist, coeffs, [name])
+    return out
+
+
+def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namespace,
+               notes: list[str], coeffs: xr.Dataset | None = None
+               ) -> list[dict[str, Any]] | None:
+    """Stability reports as dicts, or None without a mass."""
+    from hybridwsi.forces.linear import mass_from
+
+    mass = args.mass if args.mass is not None else mass_from(hist, coeffs)
     if mass is None:
         notes.append("no mass given (--mass): stability assessment skipped")
         return None
@@ -192,20 +226,21 @@ def _one_line(exc: BaseException) -> str:
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """Run the whole diagnosis: ``(JSON-ready dict, RegressionResult)``."""
     from hybridwsi import __version__
-    from hybridwsi.forces import parse_known
     from hybridwsi.diagnostic.regression import regress
 
     notes: list[str] = []
-    known = [parse_known(k) for k in args.known]  # fail fast on a bad --known
+    _known(args.known, None, None)  # fail fast on a bad --known
     if args.mass is not None and (not np.isfinite(args.mass) or args.mass <= 0):
         raise InputError(f"--mass must be a positive mass in kg, got {args.mass}")
+    coeffs = _coefficients(args)
     hist, info = _load(args, notes)
     hist = _prepare(hist, args, notes)
+    known = _known(args.known, hist, coeffs)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             result = regress(hist, force=args.force, known=known, fix_alpha=args.fix_alpha)
-            stability = _stability(result, hist, known, args, notes)
+            stability = _stability(result, hist, known, args, notes, coeffs)
         except InputError:
             raise
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -215,6 +250,7 @@ def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     out["warnings"] = notes + list(out.get("warnings", []))
     out["stability"] = stability
     out["input"] = {**info, "force": args.force, "known": list(args.known),
+                    "coeffs": args.coeffs,
                     "fix_alpha": args.fix_alpha, "dt": args.dt,
                     "n_samples": int(hist.sizes["time"]),
                     "estimated": {k: hist[k].attrs["estimated"]
@@ -239,7 +275,8 @@ def run(args: argparse.Namespace) -> int:
     n_notes = len(out["warnings"]) - len(result.warnings)
     _print(out, result, n_notes)
     if args.example and not args.known:
-        print("try: hybridwsi diagnose --example --known hydrostatic=692.2 --known added_mass=3.5")
+        print("try: hybridwsi diagnose --example --known hydrostatic=692.2 "
+              "--known added_mass_inf=3.5")
     if args.json:
         write_json(args.json, out)
         print(f"wrote {args.json}")

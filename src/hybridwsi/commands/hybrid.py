@@ -54,10 +54,10 @@ def _load(data: list[str]):
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
     import torch
 
     from hybridwsi import __version__
+    from hybridwsi.forces.linear import mass_from
     from hybridwsi.history import atomic_write, read_netcdf, time_step
     from hybridwsi.surrogate.demo import partitions
     from hybridwsi.surrogate.network import ForceNetwork
@@ -78,10 +78,10 @@ def run(args: argparse.Namespace) -> int:
         from hybridwsi.sweep import paper_coefficients
 
         coeffs = paper_coefficients()
-    if "mass" not in hists[0]:
-        raise InputError("histories carry no 'mass'")
-    mass = float(np.asarray(hists[0]["mass"].values).reshape(-1)[0])
-    part = partitions(coeffs)[args.partition]
+    mass = mass_from(hists[0], coeffs)
+    if mass is None:
+        raise InputError("neither the histories nor the coefficients carry a 'mass'")
+    part = partitions(coeffs, hists[0])[args.partition]
     n_test = max(1, round(args.test_fraction * len(hists)))
     train, test = hists[:-n_test], hists[-n_test:]
     dt = time_step(train[0])

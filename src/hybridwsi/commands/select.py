@@ -19,11 +19,15 @@ DESCRIPTION = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", help="TimeHistory NetCDF (e.g. from 'hybridwsi simulate')")
-    p.add_argument("--coeffs", help="coefficient file (hydrostatics, A_inf, damping): NetCDF, "
+    p.add_argument("--coeffs", help="coefficient file of the history's DOFs or more "
+                   "(hydrostatic_stiffness, added_mass_inf, radiation_damping, mass): NetCDF, "
                    "BEMIO .h5 or WAMIT ROOT.1 (seawater rho, g assumed)")
     p.add_argument("--dt", type=float, help="target hybrid time step [s] (default: the file's)")
-    p.add_argument("--mass", type=float, help="rigid-body mass [kg] (default: from the file)")
-    p.add_argument("--candidates", help="comma-separated candidate names (default: all available)")
+    p.add_argument("--mass", type=float, help="rigid-body mass [kg] (default: the history's, else "
+                   "the coefficients')")
+    p.add_argument("--candidates", help="comma-separated candidate names: hydrostatic, "
+                   "added_mass_inf, radiation_memory, linear_damping, quadratic_damping, "
+                   "excitation (default: all available)")
     p.add_argument("--quadratic-drag", type=float, help="Bq [N s^2/m^2] of the quadratic candidate")
     p.add_argument("--no-reconstruct", action="store_true", help="skip the reconstructions (fast)")
     p.add_argument("--json", dest="json_out", help="write the table as JSON here")

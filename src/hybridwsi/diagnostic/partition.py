@@ -1,13 +1,14 @@
 """Component selection (THEORY.md §5): which forces to model, which to leave to a surrogate.
 
-Candidates (built from the coefficients and/or the history):
+Candidates (built from the history's matrices and/or the coefficients, restricted to the
+history's DOFs; :func:`hybridwsi.forces.linear.known_from`):
 
 ==================== =========================================================================
 ``hydrostatic``       ``-C z`` (``hydrostatic_stiffness``)
 ``added_mass_inf``    ``-A∞ z̈`` (``added_mass_inf``)
 ``radiation_memory``  ``-∫K ż`` as state space (the history's ``radiation_ss`` attribute, or a
                       fit of the IRF of the coefficients)
-``linear_damping``    ``-B ż`` with ``B = B(ω_p)`` at the motion's peak frequency
+``linear_damping``    ``-B ż`` with ``B = B(ω_p)`` at the motion's peak frequency (all DOFs)
 ``quadratic_damping`` ``-Bq |ż| ż`` (only when ``quadratic_drag`` is given)
 ``excitation``        the history's ``F_exc`` as a prescribed time series
 ==================== =========================================================================
@@ -41,17 +42,19 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi.errors import HybridWSIError, InputError
 from hybridwsi.forces import (
-    AddedMass,
-    Hydrostatic,
     KnownComponent,
     LinearDamping,
     QuadraticDamping,
+    RadiationMemory,
     as_matrix,
     summed_linear_coefficients,
 )
-from hybridwsi.errors import HybridWSIError, InputError
-from hybridwsi.history import mass_matrix, time_step, validate
+from hybridwsi.forces.external import PrescribedForce
+from hybridwsi.forces.linear import has_known, known_from, mass_from
+from hybridwsi.history import time_step, validate
+from hybridwsi.hydro import coefficients
 
 CANDIDATES = ("hydrostatic", "added_mass_inf", "radiation_memory", "linear_damping",
               "quadratic_damping", "excitation")
@@ -60,77 +63,67 @@ EXCLUSIVE = ({"radiation_memory", "linear_damping"},)
 UNKNOWN_WEIGHT = 0.1
 
 
-class _Prescribed(KnownComponent):
-    """A force taken from the history (e.g. ``F_exc``): no state dependence."""
-
-    name = "excitation"
-
-    def __init__(self, variable: str) -> None:
-        self.variable = variable
-
-    def force(self, hist: xr.Dataset) -> np.ndarray:
-        return np.asarray(hist[self.variable].values, dtype=float)
-
-    def linear_coefficients(self, n_dof: int):
-        z = np.zeros((n_dof, n_dof))
-        return z, z.copy(), z.copy()
-
-    def describe(self) -> str:
-        return f"prescribed({self.variable})"
-
-
-def _coef(coeffs: xr.Dataset | None, name: str, n_dof: int) -> np.ndarray | None:
-    if coeffs is None or name not in coeffs:
-        return None
-    return np.asarray(coeffs[name].values, dtype=float).reshape(n_dof, n_dof)
-
-
-def _peak_omega(hist: xr.Dataset) -> float:
-    z = np.asarray(hist["z"].values, float)[:, 0]
-    spec = np.abs(np.fft.rfft(z - z.mean())) ** 2
-    w = 2 * np.pi * np.fft.rfftfreq(z.size, time_step(hist))
+def peak_omega(hist: xr.Dataset) -> float:
+    """Peak [rad/s] of the periodograms of z, each DOF normalised to unit total power and
+    summed, so that every DOF counts alike whatever its unit (m or rad)."""
+    z = np.asarray(hist["z"].values, float)
+    spec = np.abs(np.fft.rfft(z - z.mean(axis=0), axis=0)) ** 2
+    total = spec.sum(axis=0)
+    spec = (spec[:, total > 0] / total[total > 0]).sum(axis=1)
+    w = 2 * np.pi * np.fft.rfftfreq(z.shape[0], time_step(hist))
     return float(w[1:][np.argmax(spec[1:])])
 
 
-def _memory(hist: xr.Dataset, coeffs: xr.Dataset | None) -> KnownComponent | None:
-    from hybridwsi.forces import RadiationMemory
-    from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
+def available_candidates(hist: xr.Dataset, coeffs: xr.Dataset | None = None, *,
+                         quadratic_drag: float | None = None) -> list[str]:
+    """Names of the candidates these inputs can supply, in :data:`CANDIDATES` order."""
+    has_b = coefficients.has(coeffs, "radiation_damping")
+    ok = {
+        "hydrostatic": has_known(hist, coeffs, "hydrostatic"),
+        "added_mass_inf": has_known(hist, coeffs, "added_mass_inf"),
+        "radiation_memory": "radiation_ss" in hist.attrs or has_b,
+        "linear_damping": has_b,
+        "quadratic_damping": quadratic_drag is not None,
+        "excitation": "F_exc" in hist,
+    }
+    return [name for name in CANDIDATES if ok[name]]
 
-    if "radiation_ss" in hist.attrs:
-        return RadiationMemory(RadiationSS.from_dict(json.loads(hist.attrs["radiation_ss"])))
-    if coeffs is None or "radiation_damping" not in coeffs:
-        return None
-    from hybridwsi.hydro.irf import radiation_irf
 
-    return RadiationMemory(fit_radiation_ss(radiation_irf(coeffs)))
+def _candidate(name: str, hist: xr.Dataset, coeffs: xr.Dataset | None,
+               quadratic_drag: float | None) -> KnownComponent:
+    dofs = [str(d) for d in hist["dof"].values]
+    if name in ("hydrostatic", "added_mass_inf"):
+        return known_from(hist, coeffs, [name])[0]
+    if name == "radiation_memory":
+        return RadiationMemory.from_history(hist) or RadiationMemory.from_coefficients(coeffs, dofs)
+    if name == "linear_damping":
+        return LinearDamping.from_coefficients(coeffs, dofs, peak_omega(hist))
+    if name == "quadratic_damping":
+        return QuadraticDamping(quadratic_drag).linearise_on(hist)
+    return PrescribedForce("F_exc")
 
 
 def build_candidates(
     hist: xr.Dataset,
     coeffs: xr.Dataset | None = None,
+    names: Sequence[str] | None = None,
     *,
     quadratic_drag: float | None = None,
 ) -> dict[str, KnownComponent]:
-    """The candidate known components available for this history and coefficient set."""
-    n = hist.sizes["dof"]
-    out: dict[str, KnownComponent] = {}
-    c = _coef(coeffs, "hydrostatic_stiffness", n)
-    if c is not None:
-        out["hydrostatic"] = Hydrostatic(c)
-    a = _coef(coeffs, "added_mass_inf", n)
-    if a is not None:
-        out["added_mass_inf"] = AddedMass(a)
-    mem = _memory(hist, coeffs)
-    if mem is not None:
-        out["radiation_memory"] = mem
-    if coeffs is not None and "radiation_damping" in coeffs:
-        b = coeffs["radiation_damping"].interp(omega=_peak_omega(hist)).values.reshape(n, n)
-        out["linear_damping"] = LinearDamping(b)
-    if quadratic_drag is not None:
-        out["quadratic_damping"] = QuadraticDamping(quadratic_drag).linearise_on(hist)
-    if "F_exc" in hist:
-        out["excitation"] = _Prescribed("F_exc")
-    return out
+    """The candidate known components ``names`` (default: every available one).
+
+    Raises
+    ------
+    InputError
+        A requested candidate these inputs cannot supply.
+    """
+    avail = available_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
+    names = avail if names is None else list(names)
+    missing = [c for c in names if c not in avail]
+    if missing:
+        raise InputError(f"candidate(s) {missing} not available (need coefficients, history "
+                         f"matrices or F_exc); available: {', '.join(avail) or 'none'}")
+    return {name: _candidate(name, hist, coeffs, quadratic_drag) for name in names}
 
 
 def enumerate_partitions(names: Sequence[str]) -> list[tuple[str, ...]]:
@@ -168,12 +161,10 @@ def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
 def _reconstruction_error(hist, known, m) -> float:
     from hybridwsi.diagnostic.reconstruct import reconstruct
 
-    # a prescribed time series is equivalent inside or outside F_bb for the reconstruction ODE
-    physics = [k for k in known if not isinstance(k, _Prescribed)]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = reconstruct(hist, "F_tot", physics, mass=m)
+            res = reconstruct(hist, "F_tot", known, mass=m)
         return float(np.max(res.metrics["nrms_error"]))
     except HybridWSIError:  # a diverging reconstruction is a result, not a crash
         return float("inf")
@@ -198,13 +189,15 @@ def select_partition(
     hist : TimeHistory
         Reference with ``z, zdot, zddot`` and ``force`` (``F_exc`` enables ``excitation``).
     coeffs : Dataset, optional
-        BEM coefficients (``hydrostatic_stiffness``, ``added_mass_inf``, ``radiation_damping``).
+        BEM coefficients (``hydrostatic_stiffness``, ``added_mass_inf``, ``radiation_damping``)
+        of these DOFs or more (the history's DOFs are selected, in its order).
     candidates : sequence of str, optional
         Candidate names to combine (default: every one available, see module doc).
     dt : float, optional
         Target hybrid time step [s] for check (c); default the history's.
     mass : float or array, optional
-        Rigid-body mass [kg]; default ``hist["mass"]``, else ``coeffs["mass"]``.
+        Rigid-body mass [kg, kg m, kg m²]; default the history's ``mass``, else the
+        coefficients' restricted to the history's DOFs.
     force : str
         Total force variable [N].
     quadratic_drag : float, optional
@@ -226,24 +219,19 @@ def select_partition(
 
     validate(hist)
     n = hist.sizes["dof"]
-    m = mass if mass is not None else mass_matrix(hist)
-    if m is None and coeffs is not None and "mass" in coeffs:
-        m = np.asarray(coeffs["mass"].values, float)
+    m = mass if mass is not None else mass_from(hist, coeffs)
     if m is None:
         raise InputError("no mass: pass --mass, or use a history/coefficients carrying 'mass'")
     m = as_matrix(m, n, "mass")
     dt = float(dt if dt is not None else time_step(hist))
     if not dt > 0:
         raise InputError(f"dt must be positive, got {dt}")
-    avail = build_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
-    names = list(avail) if candidates is None else list(candidates)
-    missing = [c for c in names if c not in avail]
-    if missing:
-        raise InputError(f"candidate(s) {missing} not available (need coefficients or F_exc); "
-                         f"available: {', '.join(avail) or 'none'}")
+    avail = available_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
+    built = build_candidates(hist, coeffs, candidates, quadratic_drag=quadratic_drag)
+    names = list(built)
     rows = []
     for combo in enumerate_partitions(names):
-        known = [avail[c] for c in combo]
+        known = [built[c] for c in combo]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             reg = regress(hist, force=force, known=known)

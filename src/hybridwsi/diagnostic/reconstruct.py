@@ -32,10 +32,11 @@ from hybridwsi.forces import (
     black_box_force,
     summed_linear_coefficients,
 )
+from hybridwsi.forces.linear import mass_from
 from hybridwsi.diagnostic.regression import RegressionResult, as_components, kinematics
 from hybridwsi.diagnostic.stability import StabilityReport, prescribed_force_stability
 from hybridwsi.errors import InputError, SolverError
-from hybridwsi.history import make_history, mass_matrix, time_step, validate
+from hybridwsi.history import make_history, time_step, validate
 
 
 @dataclass
@@ -156,7 +157,8 @@ def reconstruct(
         Total force variable [N].
     known : iterable of KnownComponent or "NAME=VALUE"
         Components integrated as physics (their ``ode_force``/internal states, ``A_k`` on the
-        left-hand side) and removed from the prescribed force.
+        left-hand side) and removed from the prescribed force; components of time only
+        (``time_only``, e.g. a prescribed excitation) stay in the prescribed force.
     mass : float or ndarray, optional
         Rigid-body mass m [kg]; default ``hist["mass"]``.
     move_identified : RegressionResult, optional
@@ -178,10 +180,13 @@ def reconstruct(
         When ``solve_ivp`` fails (its message is included).
     """
     validate(hist)
-    comps = as_components(known)
+    given = as_components(known)
+    # a force of time only (e.g. the excitation) is the same inside or outside the prescribed
+    # force: it stays in F_p instead of being subtracted and integrated back
+    comps = [c for c in given if not getattr(c, "time_only", False)]
     t = np.asarray(hist["time"].values, dtype=float)
     n_dof = hist.sizes["dof"]
-    m = mass_matrix(hist) if mass is None else as_matrix(mass, n_dof, "mass")
+    m = mass_from(hist, None) if mass is None else as_matrix(mass, n_dof, "mass")
     if m is None:
         raise InputError("no mass given: pass mass=... or store 'mass' in the history")
     if not np.all(np.isfinite(m)):
@@ -246,7 +251,7 @@ def reconstruct(
     err = z - z_ref
     inputs = {
         "force": force,
-        "known": [c.describe() for c in comps],
+        "known": [c.describe() for c in given],
         "moved_identified": None if not moving else {
             "alpha": alpha.tolist(), "beta": beta.tolist(), "gamma": gamma.tolist()},
         "method": method, "rtol": rtol, "atol": atol, "max_step": step,

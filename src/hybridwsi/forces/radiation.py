@@ -14,7 +14,8 @@ import xarray as xr
 
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
-from hybridwsi.hydro.statespace import RadiationSS, simulate_states
+from hybridwsi.hydro.irf import radiation_irf
+from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss, simulate_states
 
 
 class RadiationMemory(KnownComponent):
@@ -32,6 +33,31 @@ class RadiationMemory(KnownComponent):
         self.ss = ss
         self.dofs = list(dofs) if dofs is not None else list(ss.radiating_dof)
         self.n_states = ss.order
+
+    @classmethod
+    def from_history(cls, hist: xr.Dataset) -> RadiationMemory | None:
+        """The realisation a Cummins history carries (``attrs["radiation_ss"]``), or None."""
+        if "radiation_ss" not in hist.attrs:
+            return None
+        return cls(RadiationSS.from_dict(json.loads(hist.attrs["radiation_ss"])))
+
+    @classmethod
+    def from_coefficients(cls, coeffs: xr.Dataset,
+                          dofs: Sequence[str] | None = None) -> RadiationMemory:
+        """A state-space fit of the radiation kernel of ``coeffs`` restricted to ``dofs``.
+
+        The kernel is computed for all DOFs (:func:`hybridwsi.hydro.irf.radiation_irf`) and
+        its ``dofs`` rows and columns are fitted: the other DOFs are held fixed, so they
+        radiate nothing.
+        """
+        kernel = radiation_irf(coeffs)
+        if dofs is not None:
+            have = [str(d) for d in kernel["radiating_dof"].values]
+            missing = [d for d in dofs if d not in have]
+            if missing:
+                raise InputError(f"radiation damping has no DOF {missing} (it has {have})")
+            kernel = kernel.sel(radiating_dof=list(dofs), influenced_dof=list(dofs))
+        return cls(fit_radiation_ss(kernel))
 
     def _check(self, dofs: Sequence[str]) -> None:
         if list(dofs) != self.ss.radiating_dof or list(dofs) != self.ss.influenced_dof:

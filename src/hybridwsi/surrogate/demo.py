@@ -24,28 +24,40 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.forces import AddedMass, Hydrostatic, KnownComponent
+from hybridwsi.errors import InputError
+
+from hybridwsi.forces import KnownComponent
+from hybridwsi.forces.external import PrescribedForce
+from hybridwsi.forces.linear import known_from, mass_from, matrix_from
 from hybridwsi.surrogate.network import ForceNetwork
-from hybridwsi.surrogate.rollout import PrescribedForce, check_stability, rollout
+from hybridwsi.surrogate.rollout import check_stability, rollout
 
 
-def _scalar(coeffs: xr.Dataset, name: str) -> float:
-    return float(np.asarray(coeffs[name].values, dtype=float).reshape(-1)[0])
+def partitions(coeffs: xr.Dataset | None,
+               hist: xr.Dataset | None = None) -> dict[str, dict[str, Any]]:
+    """The partitions the demo tries: known components and network inputs.
 
-
-def partitions(coeffs: xr.Dataset) -> dict[str, dict[str, Any]]:
-    """The partitions the demo tries: known components and network inputs."""
-    c, a_inf = _scalar(coeffs, "hydrostatic_stiffness"), _scalar(coeffs, "added_mass_inf")
+    C and A∞ come from ``hist`` when it carries them, else from ``coeffs`` restricted to the
+    history's DOFs (all of the coefficients' DOFs without a history).
+    """
+    hydrostatic, a_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
     return {
         "added_mass_to_network": {
-            "known": [Hydrostatic(c), PrescribedForce("F_exc")],
+            "known": [hydrostatic, PrescribedForce("F_exc")],
             "inputs": ("zdot", "zddot"),
         },
         "recommended": {
-            "known": [Hydrostatic(c), AddedMass(a_inf), PrescribedForce("F_exc")],
+            "known": [hydrostatic, a_inf, PrescribedForce("F_exc")],
             "inputs": ("zdot",),
         },
     }
+
+
+def _one_dof(mat: np.ndarray | None, name: str) -> float:
+    """The value of a 1-DOF matrix (the demo's bodies move in one DOF)."""
+    if mat is None or mat.size != 1:
+        raise InputError(f"the hybrid demo needs a 1-DOF '{name}' (got {mat})")
+    return float(mat[0, 0])
 
 
 def make_histories(coeffs: xr.Dataset, mass: float, seeds: Sequence[int], *, hs: float,
@@ -146,7 +158,7 @@ def hybrid_demo(
     import torch
 
     torch.set_num_threads(1)  # tiny networks: threads only add overhead on a shared machine
-    m0 = _scalar(coeffs, "mass")
+    m0 = _one_dof(mass_from(None, coeffs), "mass")
     masses = masses or {"body": m0, "light_body": 0.3 * m0}
     net_kw = {"hidden": (32,), "window": 11, "stride": max(1, round(0.1 / dt)),
               "max_epochs": 300, "lr": 3e-3, "patience": 30, "batch_size": 128, "seed": 0,
@@ -165,7 +177,7 @@ def hybrid_demo(
         rows = [evaluate_partition(name, part, train, test, mass, net_kw=net_kw,
                                    long_case=long_case)
                 for name, part in partitions(coeffs).items()]
-        report["bodies"][body] = {"mass": mass, "added_mass_inf": _scalar(coeffs, "added_mass_inf"),
-                                  "partitions": rows}
+        a_inf = _one_dof(matrix_from(None, coeffs, "added_mass_inf"), "added_mass_inf")
+        report["bodies"][body] = {"mass": mass, "added_mass_inf": a_inf, "partitions": rows}
     report["all_agree"] = all(r["agree"] for b in report["bodies"].values() for r in b["partitions"])
     return report

@@ -42,6 +42,7 @@ from hybridwsi.forces import (
     as_matrix,
     summed_linear_coefficients,
 )
+from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.integrators import LaggedIntegrator, check_scheme
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import make_history, time_step
@@ -64,33 +65,10 @@ class UnstablePartitionError(SolverError):
     """The hybrid scheme is predicted unstable for this partition (pass force=True to run)."""
 
 
-class PrescribedForce(KnownComponent):
-    """A known force given as a time series in the history (e.g. ``F_exc`` from BEM).
-
-    It has no state dependence, so ``linear_coefficients`` are zero. In :func:`rollout` its
-    series is read from each case history and added as a prescribed force.
-    """
-
-    name = "prescribed"
-
-    def __init__(self, variable: str = "F_exc") -> None:
-        self.variable = variable
-
-    def force(self, hist: xr.Dataset) -> np.ndarray:
-        if self.variable not in hist:
-            raise InputError(f"history has no '{self.variable}' for the prescribed force")
-        return np.asarray(hist[self.variable].values, dtype=float)
-
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        z = np.zeros((n_dof, n_dof))
-        return z, z.copy(), z.copy()
-
-    def ode_force(self, t, z, zdot, x) -> np.ndarray:
-        raise InputError(f"prescribed force '{self.variable}' is a time series; the solver "
-                         "must read it from the history (hybrid rollout does)")
-
-    def describe(self) -> str:
-        return f"prescribed({self.variable})"
+def _time_only(comp: KnownComponent) -> bool:
+    """A force that depends on time only (e.g. :class:`~hybridwsi.forces.external.
+    PrescribedForce`): read from each case history and added as a prescribed force."""
+    return bool(getattr(comp, "time_only", False))
 
 
 # ---------------------------------------------------------------------- batched physics
@@ -117,7 +95,7 @@ class BatchedPhysics:
         self.other: list[tuple[slice, KnownComponent]] = []
         n = 0
         for comp in self.known:
-            if isinstance(comp, PrescribedForce):
+            if _time_only(comp):
                 continue  # a time series: added by the rollout as a prescribed force
             if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)):
                 _, b, c = comp.linear_coefficients(n_dof)
@@ -192,7 +170,7 @@ class BatchedPhysics:
         ``linear_coefficients`` (used for the stability prediction)."""
         known = []
         for comp in self.known:
-            if isinstance(comp, PrescribedForce):
+            if _time_only(comp):
                 continue
             if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)) or (
                     hasattr(comp, "ss") and comp.n_states):
@@ -399,8 +377,12 @@ class StabilityPrediction:
     added_mass_ratio : float
         ``max |eig((m + A_k)^{-1} alpha_s)|``: >= 1 is the loosely coupled added-mass
         instability (THEORY.md §4c), and for ``implicit`` the fixed point diverges.
+    continuous_stable : bool
+        Setting (b) of :func:`hybridwsi.diagnostic.stability.surrogate_stability` (the one
+        continuous test: generalised eigenvalues of ``(m + A_k − α_s, B_k − β_s, C_k − γ_s)``).
     theory : dict
-        Verdicts of :mod:`hybridwsi.diagnostic.stability` when that module is available.
+        Reports (b) ``surrogate`` and (c) ``loosely_coupled`` of
+        :mod:`hybridwsi.diagnostic.stability` as dicts.
     """
 
     mode: str
@@ -493,46 +475,17 @@ def check_stability(
         lins = [linearise(net, h, stride=stride) for h in refs]
         lin.alpha, lin.beta, lin.gamma = (np.mean([getattr(s, k) for s in lins], 0)
                                           for k in ("alpha", "beta", "gamma"))
-    ratio = float(np.max(np.abs(np.linalg.eigvals(phys.m_inv @ lin.alpha))))
     a_k, b_k, c_k = summed_linear_coefficients(list(known), nd)
     m = as_matrix(mass, nd, "mass")
-    cont = _continuous_stable(m + a_k - lin.alpha, b_k - lin.beta, c_k - lin.gamma)
+    ratio = stability.added_mass_ratio(m, a_k, lin.alpha)
     stable = rho <= 1.0 + tol and (mode == "lagged" or ratio < 1.0)
-    theory = _theory_verdicts(m, a_k, b_k, c_k, lin, dt, scheme)
+    # THEORY.md §4b-c for the network's lag-0 sensitivities: (b) is the continuous test
+    cont = stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)
+    lagged = stability.loosely_coupled_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta,
+                                                 lin.gamma, dt, scheme)
+    theory = {"surrogate": cont.to_dict(), "loosely_coupled": lagged.to_dict()}
     return StabilityPrediction(mode, dt, rho, bool(stable), lin.alpha, lin.beta, lin.gamma,
-                               ratio, cont, theory)
-
-
-def _continuous_stable(m: np.ndarray, b: np.ndarray, c: np.ndarray) -> bool:
-    """Eigenvalues of ``m s^2 + b s + c`` in the closed left half-plane (THEORY.md §4b)."""
-    nd = m.shape[0]
-    try:
-        mi = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
-        return False
-    comp = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-mi @ c, -mi @ b]])
-    return bool(np.max(np.linalg.eigvals(comp).real) <= 1e-9)
-
-
-def _theory_verdicts(m, a_k, b_k, c_k, lin, dt, scheme) -> dict:
-    """THEORY.md §4b-c from diagnostic.stability, when that module is importable."""
-    try:
-        from hybridwsi.diagnostic import stability
-    except ImportError:
-        return {}
-    out: dict[str, Any] = {}
-    for key, call in (
-        ("surrogate", lambda: stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)),
-        ("loosely_coupled", lambda: stability.loosely_coupled_stability(
-            m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma, dt, scheme)),
-    ):
-        try:
-            res = call()
-        except Exception as exc:  # report, never hide, a failure of the other module
-            out[key] = {"error": f"{type(exc).__name__}: {exc}"}
-            continue
-        out[key] = res.to_dict() if hasattr(res, "to_dict") else res
-    return out
+                               ratio, cont.stable, theory)
 
 
 # ---------------------------------------------------------------------------------- rollout
@@ -589,7 +542,7 @@ def _case_arrays(hs: list[xr.Dataset], spec, prescribed, known):
     else:
         pre = np.asarray(prescribed, float).reshape(len(hs), hs[0].sizes["time"], nd)
     for comp in known:
-        if isinstance(comp, PrescribedForce):
+        if _time_only(comp):
             pre = pre + np.stack([comp.force(h) for h in hs])
     return eta, pre
 
