@@ -168,9 +168,9 @@ def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr
 
 def _coefficients(args: argparse.Namespace) -> xr.Dataset | None:
     """The ``--coeffs`` Dataset, or None."""
-    from hybridwsi.history import read_netcdf
+    from hybridwsi.hydro.formats import read_coefficients
 
-    return read_netcdf(args.coeffs) if args.coeffs else None
+    return read_coefficients(args.coeffs, assume_seawater=True) if args.coeffs else None
 
 
 def _known(specs: list[str], hist: xr.Dataset | None, coeffs: xr.Dataset | None) -> list:

@@ -183,7 +183,7 @@ def reconstruct(
     given = as_components(known)
     # a force of time only (e.g. the excitation) is the same inside or outside the prescribed
     # force: it stays in F_p instead of being subtracted and integrated back
-    comps = [c for c in given if not getattr(c, "time_only", False)]
+    comps = [c for c in given if not c.time_only]
     t = np.asarray(hist["time"].values, dtype=float)
     n_dof = hist.sizes["dof"]
     m = mass_from(hist, None) if mass is None else as_matrix(mass, n_dof, "mass")

@@ -65,12 +65,6 @@ class UnstablePartitionError(SolverError):
     """The hybrid scheme is predicted unstable for this partition (pass force=True to run)."""
 
 
-def _time_only(comp: KnownComponent) -> bool:
-    """A force that depends on time only (e.g. :class:`~hybridwsi.forces.external.
-    PrescribedForce`): read from each case history and added as a prescribed force."""
-    return bool(getattr(comp, "time_only", False))
-
-
 # ---------------------------------------------------------------------- batched physics
 class BatchedPhysics:
     """Known components evaluated for a batch of cases, states ``(n_cases, n)`` arrays.
@@ -95,7 +89,7 @@ class BatchedPhysics:
         self.other: list[tuple[slice, KnownComponent]] = []
         n = 0
         for comp in self.known:
-            if _time_only(comp):
+            if comp.time_only:
                 continue  # a time series: added by the rollout as a prescribed force
             if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)):
                 _, b, c = comp.linear_coefficients(n_dof)
@@ -170,7 +164,7 @@ class BatchedPhysics:
         ``linear_coefficients`` (used for the stability prediction)."""
         known = []
         for comp in self.known:
-            if _time_only(comp):
+            if comp.time_only:
                 continue
             if isinstance(comp, (Hydrostatic, LinearDamping, AddedMass)) or (
                     hasattr(comp, "ss") and comp.n_states):
@@ -542,7 +536,7 @@ def _case_arrays(hs: list[xr.Dataset], spec, prescribed, known):
     else:
         pre = np.asarray(prescribed, float).reshape(len(hs), hs[0].sizes["time"], nd)
     for comp in known:
-        if _time_only(comp):
+        if comp.time_only:
             pre = pre + np.stack([comp.force(h) for h in hs])
     return eta, pre
 
