@@ -20,8 +20,7 @@ from hybridwsi.importers.kramer import KRAMER_TE0, read_kramer_drop
 
 TE0 = KRAMER_TE0
 
-__all__ = ["TE0", "compare_decay", "crossing_periods", "equilibrium_shift", "first_extrema",
-           "load_experiment"]
+__all__ = ["TE0", "compare_decay", "equilibrium_shift", "first_extrema", "load_experiment"]
 
 
 def load_experiment(drop: str = "01D") -> pd.DataFrame:
