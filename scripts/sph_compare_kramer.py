@@ -41,7 +41,7 @@ def main() -> None:
         labels.append(label or Path(path).stem)
     print(json.dumps(report, indent=1))
     if a.png:
-        from hybridwsi.plots import save, sph_decay_figure
+        from hybridwsi.report.plots import save, sph_decay_figure
 
         ds = xr.Dataset(
             {"exp_mean": ("t", exp["x3_over_H0m_mean"].to_numpy()),

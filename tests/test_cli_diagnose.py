@@ -18,6 +18,7 @@ import pytest
 from hybridwsi import history as h
 from hybridwsi.cli import main
 from hybridwsi.commands.diagnose import EXAMPLE, example_history
+from hybridwsi.importers import read_history
 
 DATA = Path(__file__).parent / "data"
 BAD = DATA / "bad"
@@ -146,7 +147,7 @@ def test_import_then_diagnose_netcdf(tmp_path, capsys):
     assert main(["import", str(DATA / "dsph_floatinginfo.csv"), "--out", str(nc),
                  "--mass", "7.06"]) == 0
     assert "dualsphysics-info" in capsys.readouterr().out
-    ds = h.read_history(nc)
+    ds = read_history(nc)
     assert set(h.force_names(ds)) == {"F_fluid", "F_tot"}
     # F_tot = m z'' of a single-frequency motion: the fit recovers m z'' (alpha = m, gamma = 0
     # only as the identifiable combination gamma - w^2 alpha = -m w^2)
@@ -158,10 +159,10 @@ def test_import_then_diagnose_netcdf(tmp_path, capsys):
 
 
 def test_import_kramer_to_csv(tmp_path, capsys):
-    src = Path(h.__file__).parent / "data" / "kramer2021_sphere_decay" / \
+    src = Path(h.__file__).parents[1] / "data" / "kramer2021_sphere_decay" / \
         "05D_CI95_Normalized_every5th.csv"
     out = tmp_path / "k.csv"
     assert main(["import", str(src), "--out", str(out), "--estimate-derivatives", "savgol"]) == 0
-    ds = h.read_history(out)
+    ds = read_history(out)
     assert ds["z"].values[0, 0] == pytest.approx(0.15, rel=3e-3)  # 0.5 D
     assert "savgol" in ds["zddot"].attrs["estimated"]

@@ -5,6 +5,7 @@ References are analytic: derivatives of sines/multisines, exact round trips, uni
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 
 from hybridwsi import history as h
 from hybridwsi.errors import InputError
+from hybridwsi.importers import read_history
 
 DATA = Path(__file__).parent / "data"
 BAD = DATA / "bad"
@@ -170,21 +172,71 @@ def test_csv_round_trip_is_exact(tmp_path):
 def test_netcdf_round_trip_through_read_history(tmp_path):
     ds = full_history()
     h.to_netcdf(ds, tmp_path / "hist.nc")
-    back = h.read_history(tmp_path / "hist.nc")
+    back = read_history(tmp_path / "hist.nc")
     assert back.attrs["format"] == "netcdf"
     for name in ("z", "zdot", "zddot", "F_tot", "mass"):
         np.testing.assert_array_equal(back[name].values, ds[name].values)
     # the same file through CSV -> read_history gives the same numbers
     h.to_csv(back, tmp_path / "hist.csv")
-    again = h.read_history(tmp_path / "hist.csv")
+    again = read_history(tmp_path / "hist.csv")
     np.testing.assert_array_equal(again["F_tot"].values, ds["F_tot"].values)
 
 
-def test_to_csv_rejects_multi_dof(tmp_path):
-    t = np.arange(0, 1, 0.01)
-    ds = h.make_history(t, np.zeros((t.size, 2)), dof=["Heave", "Pitch"])
-    with pytest.raises(InputError, match="one DOF"):
-        h.to_csv(ds, tmp_path / "x.csv")
+def surge_pitch_history():
+    """Two DOFs of different kinds: Surge (m, N) and Pitch (rad, N m), coupled mass matrix."""
+    t = np.arange(0.0, 2.0, 0.01)
+    z = np.column_stack([0.02 * np.sin(3 * t), 0.05 * np.cos(3 * t)])
+    mass = np.array([[7.0, 0.35], [0.35, 0.12]])  # kg, kg m; kg m, kg m^2
+    forces = {"F_tot": np.column_stack([np.cos(t), 0.1 * np.sin(t)])}
+    return h.make_history(t, z, 3 * z, -9 * z, forces, dof=["Surge", "Pitch"], mass=mass,
+                          source="test")
+
+
+def test_units_per_dof_follow_the_dof_kinds():
+    ds = surge_pitch_history()
+    assert ds["z"].attrs["units"] == "m, rad"
+    assert json.loads(ds["z"].attrs["units_per_dof"]) == ["m", "rad"]
+    assert json.loads(ds["zdot"].attrs["units_per_dof"]) == ["m/s", "rad/s"]
+    assert json.loads(ds["zddot"].attrs["units_per_dof"]) == ["m/s^2", "rad/s^2"]
+    assert ds["F_tot"].attrs["units"] == "N, N m"
+    assert json.loads(ds["F_tot"].attrs["units_per_dof"]) == ["N", "N m"]
+    assert ds["mass"].attrs["units"].startswith("per DOF pair")  # kg, kg m, kg m^2 mixed
+    heave = full_history()
+    assert (heave["z"].attrs["units"], heave["F_tot"].attrs["units"]) == ("m", "N")
+    assert heave["mass"].attrs["units"] == "kg"
+    # derivatives estimated later carry the same per-DOF units
+    est = h.estimate_derivatives(ds.drop_vars(["zdot", "zddot"]))
+    assert json.loads(est["zddot"].attrs["units_per_dof"]) == ["m/s^2", "rad/s^2"]
+
+
+def test_unknown_dof_name_is_an_input_error():
+    with pytest.raises(InputError, match="degree"):
+        h.make_history(np.arange(10.0), np.zeros(10), dof=["Bob"])
+
+
+def test_multi_dof_csv_has_units_per_dof_and_round_trips_exactly(tmp_path):
+    ds = surge_pitch_history()
+    path = h.to_csv(ds, tmp_path / "sp.csv")
+    header = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")][0]
+    assert header.split(",")[:3] == ["time [s]", "z_Surge [m]", "z_Pitch [rad]"]
+    assert "F_tot_Pitch [N m]" in header and "zddot_Pitch [rad/s^2]" in header
+    back = h.read_csv(path)  # DOFs and mass from the '#' metadata lines
+    assert list(back["dof"].values) == ["Surge", "Pitch"]
+    for name in ("z", "zdot", "zddot", "F_tot", "mass"):
+        np.testing.assert_array_equal(back[name].values, ds[name].values)
+    assert h.force_names(back) == ["F_tot"]
+    assert back["F_tot"].attrs["units_per_dof"] == ds["F_tot"].attrs["units_per_dof"]
+
+
+def test_pitch_csv_in_degrees_and_kilonewton_metres(tmp_path):
+    # a rotation's moment column in kN m is a force of that DOF, converted to N m
+    p = write(tmp_path, "p.csv", "time [s],z [deg],M [kN m]\n" + "\n".join(
+        f"{0.1 * k:.1f},{k},{2 * k}" for k in range(10)))
+    ds = h.read_csv(p, dof="Pitch")
+    np.testing.assert_allclose(ds["z"].values[:, 0], np.deg2rad(np.arange(10)))
+    assert h.force_names(ds) == ["M"]
+    np.testing.assert_allclose(ds["M"].values[:, 0], 2e3 * np.arange(10))
+    assert ds["M"].attrs["units"] == "N m"
 
 
 # ------------------------------------------------------------------ CSV reading: formats, units
@@ -261,7 +313,7 @@ BAD_CASES = {
 @pytest.mark.parametrize("name", sorted(BAD_CASES))
 def test_bad_input_corpus(name):
     with pytest.raises(InputError) as err:
-        h.read_history(BAD / name)
+        read_history(BAD / name)
     msg = str(err.value)
     assert BAD_CASES[name] in msg
     assert "\n" not in msg
@@ -269,4 +321,48 @@ def test_bad_input_corpus(name):
 
 def test_corrupt_netcdf():
     with pytest.raises(InputError, match="NetCDF"):
-        h.read_history(BAD / "fake.nc")
+        read_history(BAD / "fake.nc")
+
+
+# ------------------------------------------------------------------ crossings (history.signal)
+
+
+def _free_decay(t, period, zeta, z_eq):
+    """Linear oscillator released at rest 1 above z_eq: crossings of z_eq are exactly half a
+    damped period apart (analytic)."""
+    wd = 2 * np.pi / period
+    wn = wd / np.sqrt(1 - zeta**2)
+    return z_eq + np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))
+
+
+def test_crossings_of_a_sine_are_its_zeros_and_directions_split_them():
+    t = np.linspace(0.0, 2.0, 2001)
+    z = np.sin(2 * np.pi * t / 0.5 + 0.3)  # zeros at (k pi - 0.3) / (4 pi)
+    _, tc = h.crossings(t, z)
+    expected = (np.arange(1, 9) * np.pi - 0.3) / (4 * np.pi)
+    np.testing.assert_allclose(tc, expected, atol=2e-6)
+    up = h.crossings(t, z, direction="up")[1]
+    down = h.crossings(t, z, direction="down")[1]
+    np.testing.assert_allclose(np.sort(np.r_[up, down]), tc)
+    assert np.all(np.cos(2 * np.pi * up / 0.5 + 0.3) > 0)  # rising through zero
+    with pytest.raises(InputError, match="direction"):
+        h.crossings(t, z, direction="sideways")
+
+
+def test_crossing_periods_about_the_equilibrium_not_zero():
+    t = np.linspace(0.0, 3.0, 30001)
+    z = _free_decay(t, 0.8, 0.3, 0.05)
+    np.testing.assert_allclose(h.crossing_periods(t, z, 0.05)[:3], 0.8, rtol=1e-3)
+    assert h.crossing_periods(t, z, 0.0)[1] > 1.05 * 0.8  # about z = 0 it is wrong
+    assert h.mean_crossing_period(t, z, (0.0, 2.5), z_eq=0.05) == pytest.approx(0.8, rel=1e-3)
+    # a steady oscillation about an unknown mean: z_eq=None crosses the mean
+    t10 = np.arange(0.0, 7.0, 1e-3)  # ten whole periods: their mean is the level
+    steady = 0.3 + 0.1 * np.cos(2 * np.pi * t10 / 0.7)
+    assert h.mean_crossing_period(t10, steady, z_eq=None) == pytest.approx(0.7, rel=1e-6)
+    assert np.isnan(h.mean_crossing_period(t, z, (0.0, 0.3), z_eq=0.05))  # < 3 crossings
+
+
+def test_a_sample_exactly_at_the_level_is_one_crossing():
+    t = np.arange(5.0)
+    _, tc = h.crossings(t, np.array([1.0, 0.0, -1.0, 0.0, 1.0]))
+    np.testing.assert_allclose(tc, [1.0, 3.0])  # 0.0 counts as above: one crossing per pass

@@ -22,7 +22,7 @@ from hybridwsi.errors import InputError
 DATA = Path(__file__).parent / "data"
 W = 2 * np.pi / 0.75
 M = 7.06
-PACKAGED = Path(im.__file__).parent / "data" / "kramer2021_sphere_decay"
+PACKAGED = Path(im.__file__).parents[1] / "data" / "kramer2021_sphere_decay"
 
 
 def zero_crossing_periods(ds) -> np.ndarray:
@@ -48,7 +48,7 @@ def test_kramer_dir_lookup_order(monkeypatch, tmp_path):
 
 
 def test_packaged_copy_matches_shared_data():
-    shared = Path(im.__file__).resolve().parents[3] / "shared" / "data" / "kramer2021_sphere_decay"
+    shared = Path(im.__file__).resolve().parents[4] / "shared" / "data" / "kramer2021_sphere_decay"
     names = ["01D_CI95_Normalized_every5th.csv", "03D_CI95_Normalized_every5th.csv",
              "05D_CI95_Normalized_every5th.csv", "README.md", "numerical/LPF1_01D.csv"]
     for name in names:
@@ -163,17 +163,17 @@ def test_floatingace_drops_predictor_rows_and_states_missing_z():
 
 
 def test_read_history_dispatch_and_options(tmp_path):
-    ds = h.read_history(PACKAGED / "01D_CI95_Normalized_every5th.csv", drop_height=0.03)
+    ds = im.read_history(PACKAGED / "01D_CI95_Normalized_every5th.csv", drop_height=0.03)
     assert ds.attrs["format"] == "kramer"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ace = h.read_history(DATA / "dsph_floatingace.csv", resample=True, mass=M)
+        ace = im.read_history(DATA / "dsph_floatingace.csv", resample=True, mass=M)
     assert ace.attrs["format"] == "dualsphysics-ace" and float(ace["mass"].values[0, 0]) == M
     with pytest.raises(InputError, match="do not apply"):
-        h.read_history(DATA / "dsph_floatinginfo.csv", zdot="w")
+        im.read_history(DATA / "dsph_floatinginfo.csv", zdot="w")
     with pytest.raises(InputError, match="unknown format"):
-        h.read_history(DATA / "dsph_floatinginfo.csv", format="wamit")
+        im.read_history(DATA / "dsph_floatinginfo.csv", format="wamit")
     # forced format on a plain CSV reader
-    forced = h.read_history(DATA / "dsph_floatinginfo.csv", format="csv", time="time",
+    forced = im.read_history(DATA / "dsph_floatinginfo.csv", format="csv", time="time",
                             z="heave", forces=["fluidforcelin.z"])
     assert h.force_names(forced) == ["fluidforcelin.z"]

@@ -71,7 +71,7 @@ def test_steady_state_is_flagged_with_the_right_dynamic_stiffness(quick_results)
 
 def test_reconstruction_verdicts_follow_theory(quick_results):
     m = json.loads((quick_results / "fig2_metrics.json").read_text())["BEM"]
-    # THEORY.md §4a: nothing known → double integrator (drift); C known, B = 0 → neutral
+    # docs/THEORY.md §4a: nothing known → double integrator (drift); C known, B = 0 → neutral
     assert m["1"]["prescribed"]["stability"]["verdict"] == "drift"
     assert m["2"]["prescribed"]["stability"]["verdict"] == "neutral"
     assert m["3"]["prescribed"]["stability"]["verdict"] == "neutral"

@@ -41,7 +41,8 @@ def _damped(t, period, zeta, z_eq):
 def test_crossing_periods_of_a_heavily_damped_record_about_a_shifted_mean():
     # the 26 % "period error" came from crossings of z = 0 in an over-damped record whose
     # equilibrium had risen with the tank's water level: about z_eq the period is exact
-    from hybridwsi.sph.decay import crossing_periods, first_extrema
+    from hybridwsi.history import crossing_periods
+    from hybridwsi.sph.decay import first_extrema
 
     t = np.linspace(0, 3, 30001)
     z = _damped(t, 0.8, 0.3, 0.05)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hybridwsi.errors import InputError
-from hybridwsi.validation import rms_heave_error, score_published_codes
+from hybridwsi.report.validation import rms_heave_error, score_published_codes
 
 TE0 = 0.7561
 
@@ -37,7 +37,7 @@ def test_scoring_reproduces_the_value_quoted_for_lpf2():
 
 def test_crossing_period_of_a_damped_sinusoid_is_its_damped_period():
     """z = e^{-ζωt} cos(ω_d t): zero crossings are exactly π/ω_d apart."""
-    from hybridwsi.validation import crossing_period
+    from hybridwsi.report.validation import crossing_period
 
     wd = 2 * np.pi / 0.93
     t = np.linspace(0.0, 6.0, 6001)

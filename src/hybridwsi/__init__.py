@@ -2,9 +2,11 @@
 
 The package follows the pipeline of the paper "Towards ML-ready hybrid solvers for
 wave-structure interaction": generators (BEM/Cummins, SPH, file import) produce a
-:mod:`~hybridwsi.history` TimeHistory (an :class:`xarray.Dataset`), the
-:mod:`~hybridwsi.diagnostic` regresses the black-box force on the motion and judges the
-stability of a force partition, and :mod:`~hybridwsi.report` writes tables and figures.
+:mod:`~hybridwsi.history` TimeHistory (an :class:`xarray.Dataset`; third-party files are read
+by :mod:`~hybridwsi.importers`), the :mod:`~hybridwsi.diagnostic` regresses the black-box force
+on the motion and judges the stability of a force partition, the :mod:`~hybridwsi.surrogate`
+learns what is left, and :mod:`~hybridwsi.report` (``hybridwsi reproduce``) writes the paper's
+tables and figures. Theory: docs/THEORY.md; data model: docs/DATA_MODEL.md.
 """
 
 from __future__ import annotations

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import version
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, read_netcdf, to_netcdf
 
@@ -31,12 +32,6 @@ Runner = Callable[[dict, dict], xr.Dataset]
 PARTS = "parts"
 STORE = "sweep.zarr"
 MANIFEST = "manifest.json"
-
-
-def _version() -> str:
-    from hybridwsi import __version__
-
-    return __version__
 
 
 @dataclass
@@ -48,8 +43,8 @@ class SweepConfig:
     duration, dt : float
         Simulated time and time step [s].
     coeffs : str or None
-        NetCDF of BEM coefficients (``hydro.bem.compute`` output); None = the paper sphere
-        computed (and cached) by :func:`paper_coefficients`.
+        NetCDF of BEM coefficients (``hydro.bem.compute`` output); None = the paper sphere's
+        shipped coefficients (:func:`load_coefficients`).
     mass : float or None
         Rigid-body mass [kg]; None = the coefficients' ``mass``.
     nonlinear_hydrostatics : bool
@@ -94,16 +89,18 @@ def case_grid(hs: Sequence[float], tp: Sequence[float], seeds: int | Sequence[in
 
 
 # ------------------------------------------------------------------------ default runner
-def paper_coefficients() -> xr.Dataset:
-    """BEM coefficients of the paper's half-submerged sphere (cached by ``hydro.bem``)."""
+def load_coefficients(path: str | os.PathLike | None = None) -> xr.Dataset:
+    """The coefficients a sweep runs with: the NetCDF at ``path``, or with None the paper
+    sphere's, as shipped with the package (``hydro.bem.paper_coefficients``; no BEM run)."""
+    if path:
+        return read_netcdf(path)
     from hybridwsi.hydro import bem
 
     return bem.paper_coefficients()
 
 
-def _load_coeffs(config: dict) -> xr.Dataset:
-    path = config.get("coeffs")
-    return read_netcdf(path) if path else paper_coefficients()
+#: transitional name used by ``commands/hybrid.py``; :func:`load_coefficients` with no path
+paper_coefficients = load_coefficients
 
 
 def cummins_case(case: dict, config: dict) -> xr.Dataset:
@@ -112,7 +109,7 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
 
     coeffs = config.get("_coeffs")
     if coeffs is None:
-        coeffs = _load_coeffs(config)
+        coeffs = load_coefficients(config.get("coeffs"))
     nonlinear = bool(config.get("nonlinear_hydrostatics", False))
     return cummins.simulate(
         coeffs, mass=config.get("mass"), duration=float(config["duration"]),
@@ -134,7 +131,7 @@ def run_one(case: dict, config: dict, out: str, runner: Runner) -> dict:
     if path.is_file():
         return {"case_id": case["case_id"], "status": "skipped"}
     hist = runner(case, config)
-    hist = hist.assign_attrs(case=json.dumps(case), hybridwsi_version=_version())
+    hist = hist.assign_attrs(case=json.dumps(case), hybridwsi_version=version())
     to_netcdf(hist, path)
     return {"case_id": case["case_id"], "status": "done"}
 
@@ -222,7 +219,7 @@ def run_sweep(
             if runner is cummins_case:  # load/compute and fit once, ship to the workers
                 from hybridwsi import cummins
 
-                cfg["_coeffs"] = _load_coeffs(cfg)
+                cfg["_coeffs"] = load_coefficients(cfg.get("coeffs"))
                 import inspect
 
                 # the fit simulate() itself would make (same tolerance), done once
@@ -259,7 +256,7 @@ def run_sweep(
 
 
 def _write_manifest(out: Path, cases: Sequence[dict], config: SweepConfig, status: str) -> None:
-    meta = {"hybridwsi_version": _version(), "status": status, "config": asdict(config),
+    meta = {"hybridwsi_version": version(), "status": status, "config": asdict(config),
             "n_cases": len(cases), "cases": list(cases)}
     text = json.dumps(meta, indent=1, default=str)
     atomic_write(out / MANIFEST, lambda tmp: Path(tmp).write_text(text))
@@ -290,7 +287,7 @@ def consolidate(out: str | os.PathLike, case_ids: Sequence[str] | None = None) -
     for key in ("hs", "tp", "seed"):
         if all(key in c for c in cases):
             big = big.assign_coords({key: ("case", [c[key] for c in cases])})
-    big.attrs = {"hybridwsi_version": _version(), "source": "hybridwsi.sweep",
+    big.attrs = {"hybridwsi_version": version(), "source": "hybridwsi.sweep",
                  "inputs": json.dumps({"cases": cases}, default=str)}
     big = big.chunk({"case": 1})
     target = out / STORE

@@ -7,11 +7,16 @@ Table 1 values; ``load_case("kramer2021_decay")`` the decay experiment of Kramer
 
 from __future__ import annotations
 
-import tomllib
+import sys
 from importlib import resources
 from typing import Any
 
 from hybridwsi.errors import InputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, published as tomli (pyproject.toml dependency)
+    import tomli as tomllib
 
 
 def available() -> list[str]:

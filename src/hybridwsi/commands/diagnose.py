@@ -1,6 +1,6 @@
 """``hybridwsi diagnose``: force-sensitivity regression and stability verdict for any history.
 
-Reads a force/motion file (:func:`hybridwsi.history.read_history`: NetCDF, CSV, DualSPHysics,
+Reads a force/motion file (:func:`hybridwsi.importers.read_history`: NetCDF, CSV, DualSPHysics,
 Kramer 2021), estimates missing velocity/acceleration from ``z`` (Savitzky–Golay by default,
 stated in the warnings), regresses ``F_bb = F_force − Σ F_known`` on the motion
 (:func:`hybridwsi.diagnostic.regression.regress`) and, when a mass is known, judges the stability
@@ -118,7 +118,7 @@ def example_history() -> xr.Dataset:
 
 def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[str, Any]]:
     """The history to diagnose and a description of where it came from."""
-    from hybridwsi.history import read_history
+    from hybridwsi.importers import read_history
 
     if args.example:
         if args.file:

@@ -36,7 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="CSV force column [N] to import (repeatable; default: every "
                         "other numeric column with a force unit or no unit)")
     parser.add_argument("--sep", help="CSV separator (default: detected; 'whitespace' allowed)")
-    parser.add_argument("--dof", help="DOF name of a CSV file (default Heave)")
+    parser.add_argument("--dof", help="DOF name(s) of a CSV file, e.g. Pitch or Surge,Pitch "
+                        "(default: the file's '# dof:' line, else Heave)")
     parser.add_argument("--mass", type=float, metavar="M", help="body mass [kg] to store")
     parser.add_argument("--drop-height", type=float, metavar="H",
                         help="Kramer 2021 measured files: drop height [m] (default from the "
@@ -49,7 +50,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.history import estimate_derivatives, force_names, read_history, to_csv, to_netcdf
+    from hybridwsi.history import estimate_derivatives, force_names, to_csv, to_netcdf
+    from hybridwsi.importers import read_history
 
     out = Path(args.out)
     if out.suffix.lower() not in (".nc", ".csv"):

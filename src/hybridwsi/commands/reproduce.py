@@ -35,9 +35,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.reproduce import run as reproduce
-
     from hybridwsi.errors import InputError
+    from hybridwsi.report.reproduce import run as reproduce
 
     if args.sph_dp is not None and not args.sph_dp > 0:
         raise InputError(f"--sph-dp must be positive, got {args.sph_dp}")

@@ -1,46 +1,41 @@
-"""Heave-decay comparison with the Kramer et al. (2021) floating-sphere experiment.
+"""Heave-decay comparison of SPH runs with the Kramer et al. (2021) floating-sphere experiment.
 
-Kramer, M.B. et al., "Highly Accurate Experimental Heave Decay Tests with a Floating Sphere: A
-Public Benchmark Dataset for Model Validation of Fluid-Structure Interaction", Energies 14(2):269
-(2021), doi:10.3390/en14020269; data in /work/shared/data/kramer2021_sphere_decay (see its
-README: heave normalised by the measured drop height, time by Te0 = 0.7561 s).
+The experiment is read through :mod:`hybridwsi.importers.kramer` (the copy shipped with the
+package, or ``HYBRIDWSI_KRAMER_DIR``); periods come from the package's one crossing analysis,
+:func:`hybridwsi.history.crossing_periods`, taken about the run's own equilibrium.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 
 from hybridwsi.errors import InputError
+from hybridwsi.history import crossing_periods
+from hybridwsi.importers.kramer import KRAMER_TE0, read_kramer_drop
 
-TE0 = 0.7561
-DATA_DIR = Path("/work/shared/data/kramer2021_sphere_decay")
+TE0 = KRAMER_TE0
 
-
-def load_experiment(drop: str = "01D", data_dir: str | Path = DATA_DIR) -> pd.DataFrame:
-    """Measured mean heave/H0 against t/Te0 (columns as in the CSV)."""
-    path = Path(data_dir) / f"{drop}_CI95_Normalized_every5th.csv"
-    if not path.is_file():
-        raise InputError(f"Kramer data not found: {path}")
-    return pd.read_csv(path)
+__all__ = ["TE0", "compare_decay", "equilibrium_shift", "first_extrema", "load_experiment"]
 
 
-def crossing_periods(t: np.ndarray, z: np.ndarray, z_eq: float = 0.0) -> np.ndarray:
-    """Successive full-period estimates [s]: twice the spacing of the crossings of z = z_eq.
+def load_experiment(drop: str = "01D") -> pd.DataFrame:
+    """Measured mean heave/H0 against t/Te0 of one drop test, as a table.
 
-    Crossings must be taken about the record's own equilibrium: a strongly damped record
-    oscillating about a shifted mean otherwise gives spurious long "periods".
+    Columns ``t_over_Te0``, ``x3_over_H0m_mean``, ``ci95_lower``, ``ci95_upper`` (the names
+    of the data files), read by :func:`hybridwsi.importers.kramer.read_kramer_drop`.
     """
-    z = np.asarray(z, dtype=float) - z_eq
-    s = np.sign(z)
-    i = np.flatnonzero(s[:-1] * s[1:] < 0)
-    tc = t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i])
-    return 2.0 * np.diff(tc)
+    exp = read_kramer_drop(drop, normalised=True)
+    return pd.DataFrame({
+        "t_over_Te0": exp["time"].values / TE0,
+        "x3_over_H0m_mean": exp["z"].values[:, 0],
+        "ci95_lower": exp["ci95_lower"].values[:, 0],
+        "ci95_upper": exp["ci95_upper"].values[:, 0],
+    })
 
 
 def equilibrium_shift(z0: float, radius: float, tank_area: float) -> float:
@@ -81,7 +76,7 @@ def first_extrema(t: np.ndarray, z: np.ndarray) -> tuple[float, float, float, fl
 
 
 def compare_decay(hist: xr.Dataset, z0: float, drop: str = "01D", n_periods: float = 5.0,
-                  data_dir: str | Path = DATA_DIR, z_eq: float | None = None) -> dict[str, float]:
+                  z_eq: float | None = None) -> dict[str, float]:
     """Period, first extrema and RMS error of z/H0 over [0, n_periods Te0] against the experiment.
 
     Returns a dict with the simulated and measured mean period of the first two full cycles
@@ -91,9 +86,9 @@ def compare_decay(hist: xr.Dataset, z0: float, drop: str = "01D", n_periods: flo
     robust to the mean level and to heavy damping), the RMS of the difference of z/H0 and the
     covered time (the comparison is cut to the shorter record).
     """
-    exp = load_experiment(drop, data_dir)
-    te = exp["t_over_Te0"].to_numpy() * TE0
-    ze = exp["x3_over_H0m_mean"].to_numpy()
+    exp = read_kramer_drop(drop, normalised=True)
+    te = exp["time"].values
+    ze = exp["z"].values[:, 0]
     t = hist["time"].values
     z = hist["z"].sel(dof="Heave").values / z0
     t_end = min(n_periods * TE0, t[-1])

@@ -8,7 +8,7 @@ progressive linear waves of height ``H`` with (Biésel 1951; Dean & Dalrymple 19
 where ``k`` solves the linear dispersion relation ``omega^2 = g k tanh(kd)``. In shallow water
 (kd -> 0) this tends to ``H/S = kd``; in deep water to 2.
 
-Pure NumPy/SciPy: usable without PySPH.
+NumPy/SciPy and the history package only: usable without PySPH.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from hybridwsi.errors import InputError
+from hybridwsi.history.signal import crossings
 
 G = 9.81
 
@@ -107,8 +108,9 @@ def zero_upcrossing(t: np.ndarray, eta: np.ndarray, t_start: float = 0.0,
                     t_end: float | None = None) -> tuple[float, float, int]:
     """Mean wave height H [m] and period T [s] of a record by zero up-crossing analysis.
 
-    The record (minus its mean over the window) is cut at up-crossings (linearly interpolated);
-    each complete wave contributes crest - trough and its duration. Returns (H, T, n_waves).
+    The record (minus its mean over the window) is cut at up-crossings (linearly interpolated,
+    :func:`hybridwsi.history.crossings`); each complete wave contributes crest - trough and its
+    duration. Returns (H, T, n_waves).
     """
     t = np.asarray(t, dtype=float)
     eta = np.asarray(eta, dtype=float)
@@ -116,10 +118,9 @@ def zero_upcrossing(t: np.ndarray, eta: np.ndarray, t_start: float = 0.0,
         raise InputError("t and eta must be 1-D arrays of the same length")
     sel = (t >= t_start) & (t <= (t[-1] if t_end is None else t_end)) & np.isfinite(eta)
     t, e = t[sel], eta[sel] - np.mean(eta[sel]) if np.any(sel) else eta[sel]
-    up = np.flatnonzero((e[:-1] < 0) & (e[1:] >= 0))
+    up, tc = crossings(t, e, 0.0, direction="up")  # e is already about its mean
     if len(up) < 2:
         raise InputError("fewer than two zero up-crossings in the window: no waves measured")
-    tc = t[up] - e[up] * (t[up + 1] - t[up]) / (e[up + 1] - e[up])
     heights = [e[i0:i1 + 1].max() - e[i0:i1 + 1].min() for i0, i1 in itertools.pairwise(up)]
     return float(np.mean(heights)), float(np.mean(np.diff(tc))), len(heights)
 

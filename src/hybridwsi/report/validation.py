@@ -18,8 +18,15 @@ import pandas as pd
 import xarray as xr
 
 from hybridwsi.errors import InputError
+from hybridwsi.history import mean_crossing_period
+from hybridwsi.importers.kramer import (
+    KRAMER_DROPS,
+    kramer_numerical_files,
+    read_kramer_drop,
+    read_kramer_numerical,
+)
 
-DROPS = ("01D", "03D", "05D")
+DROPS = KRAMER_DROPS
 
 
 def rms_heave_error(
@@ -58,23 +65,6 @@ def rms_heave_error(
         )
     zi = np.interp(t_exp[sel], t_model, zn_model)
     return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
-
-
-def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
-    """Mean period [same unit as ``t``] from the zero crossings of ``z`` inside ``window``.
-
-    Crossings are located by linear interpolation; the period is twice the mean spacing of
-    consecutive crossings (the first half cycle, which depends on the release, is skipped).
-    NaN when fewer than three crossings fall in the window.
-    """
-    t, z = np.asarray(t, float), np.asarray(z, float)
-    sel = (t >= window[0]) & (t <= window[1])
-    t, z = t[sel], z[sel]
-    i = np.nonzero(np.signbit(z[:-1]) != np.signbit(z[1:]))[0]
-    tc = t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i])
-    if tc.size < 3:
-        return float("nan")
-    return float(2.0 * np.mean(np.diff(tc[1:])))
 
 
 @dataclass
@@ -140,20 +130,14 @@ class DecayValidation:
         return "\n".join(rows)
 
 
-def _measured(drop: str) -> xr.Dataset:
-    """Measured mean heave of one drop, normalised (drop height 1)."""
-    from hybridwsi import importers
+def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
+    """Mean crossing period of a decay record over ``window`` (same unit as ``t``).
 
-    path = importers.kramer_data_dir() / f"{drop}_CI95_Normalized_every5th.csv"
-    return importers.read_kramer_decay(path, drop_height=1.0)
-
-
-def published_code_files(drop: str) -> dict[str, Any]:
-    """``{code: path}`` of the published numerical results for one drop."""
-    from hybridwsi import importers
-
-    folder = importers.kramer_data_dir() / "numerical"
-    return {p.name.split("_")[0]: p for p in sorted(folder.glob(f"*_{drop}.csv"))}
+    Every record here (experiment, published codes, our models) is heave measured from its
+    equilibrium, so the crossings are those of z = 0; the first half cycle, which depends on
+    the release, is skipped (:func:`hybridwsi.history.mean_crossing_period`).
+    """
+    return mean_crossing_period(t, z, window, z_eq=0.0, skip=1)
 
 
 def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
@@ -164,13 +148,11 @@ def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
     ``measured`` is the experiment's history of that drop when the caller already read it;
     ``periods``, when given, receives each code's :func:`crossing_period` / Te0.
     """
-    from hybridwsi import importers
-
-    exp = _measured(drop) if measured is None else measured
+    exp = read_kramer_drop(drop, normalised=True) if measured is None else measured
     t_exp, zn_exp = exp["time"].values, exp["z"].values[:, 0]
     out = {}
-    for code, path in published_code_files(drop).items():
-        num = importers.read_kramer_numerical(path, require_uniform=False)
+    for code, path in kramer_numerical_files(drop).items():
+        num = read_kramer_numerical(path, require_uniform=False)
         z = num["z"].values[:, 0]
         out[code] = rms_heave_error(num["time"].values, z / z[0], t_exp, zn_exp, te0, window)
         if periods is not None:
@@ -224,7 +206,7 @@ def run_decay_validation(
     for drop, variant in bar:
         h0 = case["drops"][drop]
         if drop not in exp_cache:
-            exp_cache[drop] = _measured(drop)
+            exp_cache[drop] = read_kramer_drop(drop, normalised=True)
         exp = exp_cache[drop]
         hist = cummins.simulate(
             coeffs,

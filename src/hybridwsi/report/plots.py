@@ -14,7 +14,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
+from hybridwsi.dofs import is_rotation  # noqa: E402
 from hybridwsi.history import atomic_write  # noqa: E402
+from hybridwsi.importers.kramer import KRAMER_TE0  # noqa: E402
 
 DROP_LABEL = {"01D": "H0 = 0.1D", "03D": "H0 = 0.3D", "05D": "H0 = 0.5D"}
 
@@ -55,7 +57,7 @@ def decay_validation_figure(curves: xr.Dataset) -> plt.Figure:
         ax.axhline(0.0, color="0.5", lw=0.5)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8, loc="upper right")
-    axes[-1].set_xlabel("t / Te0 [-]  (Te0 = 0.7561 s)")
+    axes[-1].set_xlabel(f"t / Te0 [-]  (Te0 = {KRAMER_TE0} s)")
     fig.tight_layout()
     return fig
 
@@ -68,12 +70,15 @@ def reconstruction_figure(
     title: str = "BEM",
     bias: float = 0.0,
 ) -> plt.Figure:
-    """Paper Fig. 2: heave reconstructed with several partitions against the reference.
+    """Paper Fig. 2: the first DOF reconstructed with several partitions against the reference.
 
     Top: z(t) of the reference and of each reconstruction. Middle: |error| on a log scale (so
     drift and neutral error growth are visible). Bottom (when ``moved`` is given): error after
-    moving the identified α, β, γ into the ODE (THEORY.md §4a).
+    moving the identified α, β, γ into the ODE (docs/THEORY.md §4a). Axes in mm for a
+    translation, mrad for a rotation, and δF in N or N m (:mod:`hybridwsi.dofs`).
     """
+    dof = str(reference["dof"].values[0])
+    unit, force_unit = ("mrad", "N m") if is_rotation(dof) else ("mm", "N")
     n_rows = 3 if moved else 2
     fig, axes = plt.subplots(n_rows, 1, figsize=(9, 2.8 * n_rows), sharex=True)
     t = reference["time"].values
@@ -83,7 +88,7 @@ def reconstruction_figure(
     for i, (name, rec) in enumerate(reconstructions.items()):
         ax.plot(rec["time"], rec["z"].values[:, 0] * 1e3, color=f"C{i}", lw=1.0, ls="--",
                 label=f"case {name} ({verdicts.get(name, '?')})")
-    ax.set_ylabel("heave z [mm]")
+    ax.set_ylabel(f"{dof.lower()} z [{unit}]")
     ax.set_title(f"{title}: reconstruction m z̈ = F_known + F_bb(t)", fontsize=10)
     ax.legend(fontsize=8, ncol=2, loc="upper left")
     ax.grid(alpha=0.3)
@@ -95,7 +100,7 @@ def reconstruction_figure(
                         label=f"case {name}")
         # a diverging reconstruction leaves the axis instead of hiding the others
         ax.set_ylim(1e-9, 1e3)
-        ax.set_ylabel(f"|z − z_ref| [mm]\n{label}")
+        ax.set_ylabel(f"|z − z_ref| [{unit}]\n{label}")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, ncol=3, loc="lower right")
 
@@ -104,7 +109,8 @@ def reconstruction_figure(
     if moved:
         _errors(axes[2], moved, f"memory α, β, γ in ODE{extra}")
     if bias:
-        axes[1].set_title(f"constant force error δF = {bias:.3g} N added to F_bb", fontsize=9)
+        axes[1].set_title(f"constant force error δF = {bias:.3g} {force_unit} added to F_bb",
+                          fontsize=9)
     axes[-1].set_xlabel("time t [s]")
     fig.tight_layout()
     return fig
@@ -128,7 +134,7 @@ def sph_decay_figure(curves: xr.Dataset) -> plt.Figure:
         ax.plot(t, curves["heave_over_H0"].sel(run=run).values, color=f"C{i}", lw=1.1,
                 label=str(run))
     ax.set_xlim(-0.2, 5.0)
-    ax.set_xlabel("t / Te0 [-]  (Te0 = 0.7561 s)")
+    ax.set_xlabel(f"t / Te0 [-]  (Te0 = {KRAMER_TE0} s)")
     ax.set_ylabel("heave / H0 [-]")
     ax.set_title("SPH heave decay of the Kramer sphere, H0 = 0.1D", fontsize=10)
     ax.axhline(0.0, color="0.5", lw=0.5)

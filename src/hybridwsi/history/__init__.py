@@ -1,0 +1,107 @@
+"""TimeHistory: the one labelled type that carries force/motion histories through the pipeline.
+
+A TimeHistory is an :class:`xarray.Dataset` (``time`` × ``dof``; ``z``, ``zdot``, ``zddot``,
+force components, optional ``mass``; units per DOF). The package is split along its seams:
+
+- :mod:`~hybridwsi.history.model`: the data model — :func:`make_history`, :func:`validate`,
+  :func:`force_names`, :func:`mass_matrix`, :func:`set_mass`, :func:`time_step`,
+  :func:`is_uniform`;
+- :mod:`~hybridwsi.history.io`: atomic writers (:func:`atomic_write`, :func:`write_json`,
+  :func:`write_text`) and the NetCDF round trip (:func:`to_netcdf`, :func:`read_netcdf`);
+- :mod:`~hybridwsi.history.text`: text tables with units in their headers
+  (:class:`TextTable`, :func:`read_csv`, :func:`to_csv`);
+- :mod:`~hybridwsi.history.signal`: derivative estimation, resampling and the crossing
+  analysis (:func:`estimate_derivatives`, :func:`resample`, :func:`finalize_import`,
+  :func:`crossing_periods`).
+
+Reading any supported file format (the dispatcher ``read_history``) lives one layer up, in
+:mod:`hybridwsi.importers`, which builds on this package; this package never imports it.
+The layout is described in docs/DATA_MODEL.md.
+"""
+
+from __future__ import annotations
+
+from hybridwsi._meta import version
+from hybridwsi.history.io import (
+    NETCDF_MAGIC,
+    atomic_write,
+    read_netcdf,
+    to_netcdf,
+    write_json,
+    write_text,
+)
+from hybridwsi.history.model import (
+    DEFAULT_DOF,
+    KINEMATICS,
+    UNIFORM_RTOL,
+    force_names,
+    is_uniform,
+    make_history,
+    mass_matrix,
+    set_mass,
+    time_step,
+    units_attrs,
+    units_per_dof,
+    validate,
+)
+from hybridwsi.history.signal import (
+    crossing_periods,
+    crossings,
+    estimate_derivatives,
+    finalize_import,
+    mean_crossing_period,
+    resample,
+    savgol_window,
+)
+from hybridwsi.history.text import (
+    UNIT_FACTORS,
+    TextTable,
+    detect_separator,
+    quantity_of,
+    read_csv,
+    read_text_file,
+    split_header,
+    to_csv,
+    unit_factor,
+)
+
+#: transitional: ``hybridwsi.cummins`` still imports ``history._version``; use
+#: :func:`hybridwsi._meta.version` (remove this alias once nothing imports it)
+_version = version
+
+__all__ = [
+    "DEFAULT_DOF",
+    "KINEMATICS",
+    "NETCDF_MAGIC",
+    "UNIFORM_RTOL",
+    "UNIT_FACTORS",
+    "TextTable",
+    "atomic_write",
+    "crossing_periods",
+    "crossings",
+    "detect_separator",
+    "estimate_derivatives",
+    "finalize_import",
+    "force_names",
+    "is_uniform",
+    "make_history",
+    "mass_matrix",
+    "mean_crossing_period",
+    "quantity_of",
+    "read_csv",
+    "read_netcdf",
+    "read_text_file",
+    "resample",
+    "savgol_window",
+    "set_mass",
+    "split_header",
+    "time_step",
+    "to_csv",
+    "to_netcdf",
+    "units_attrs",
+    "units_per_dof",
+    "unit_factor",
+    "validate",
+    "write_json",
+    "write_text",
+]

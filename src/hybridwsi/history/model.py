@@ -1,0 +1,280 @@
+"""The TimeHistory data model: build, check and query one (no file I/O, no signal processing).
+
+A TimeHistory is an :class:`xarray.Dataset` with
+
+- coordinate ``time`` [s], strictly increasing and uniformly sampled;
+- coordinate ``dof`` (str), degree-of-freedom names as in Capytaine (``"Heave"``, ``"Surge"``,
+  ``"Pitch"``...); a 1-DOF history has ``dof = ["Heave"]``;
+- variables ``z``, ``zdot``, ``zddot`` with dims ``(time, dof)``: m, m/s, m/s² for translations
+  and rad, rad/s, rad/s² for rotations;
+- any number of force components with dims ``(time, dof)``: N on translations, N m on
+  rotations, each with ``attrs["role"] == "force"``; ``F_tot`` by convention is the total fluid
+  + external force so that ``M zddot = F_tot`` (paper Eq. 2);
+- optional ``mass`` with dims ``(dof, dof_j)`` (the rigid-body mass matrix: kg, kg m, kg m²);
+- optional other variables (e.g. wave elevation ``eta(time, probe)`` [m]);
+- ``attrs``: ``hybridwsi_version``, ``source`` (what made it), ``inputs`` (JSON of the inputs)
+  and, for every kinematic variable that was estimated rather than given,
+  ``attrs["estimated"]`` on that variable describing the method.
+
+Units come from :mod:`hybridwsi.dofs`: every ``(time, dof)`` variable carries ``units`` (one
+label, e.g. ``"m, rad"`` for Surge and Pitch) and ``units_per_dof`` (a JSON list in DOF order,
+``["m", "rad"]``). See docs/DATA_MODEL.md.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi import dofs as _dofs
+from hybridwsi._meta import version
+from hybridwsi.errors import InputError
+from hybridwsi.hydro.coefficients import pair_units_attr
+
+KINEMATICS = ("z", "zdot", "zddot")
+DEFAULT_DOF = ("Heave",)
+#: relative spread of the time step tolerated before a history is called irregular
+UNIFORM_RTOL = 1e-3
+
+
+def units_attrs(quantity: str, dof: Sequence[str]) -> dict[str, str]:
+    """``units`` and ``units_per_dof`` attributes of a ``(time, dof)`` variable.
+
+    Parameters
+    ----------
+    quantity : str
+        ``"z"``, ``"zdot"``, ``"zddot"`` or ``"force"``.
+    dof : sequence of str
+        The history's DOFs, in order.
+
+    Returns
+    -------
+    dict
+        ``{"units": "m, rad", "units_per_dof": '["m", "rad"]'}`` for a Surge–Pitch ``z``.
+    """
+    names = _dofs.check_dofs(list(dof))
+    per = [_dofs.force_unit(d) if quantity == "force" else _dofs.motion_unit(d, quantity)
+           for d in names]
+    return {"units": _dofs.units_label(names, quantity), "units_per_dof": json.dumps(per)}
+
+
+def units_per_dof(ds: xr.Dataset, name: str) -> list[str]:
+    """Unit of variable ``name`` of a history per DOF (from ``units_per_dof``, else ``units``)."""
+    attrs = ds[name].attrs
+    if "units_per_dof" in attrs:
+        return list(json.loads(attrs["units_per_dof"]))
+    return [str(attrs.get("units", ""))] * ds.sizes["dof"]
+
+
+def _mass_attrs(dof: Sequence[str]) -> dict[str, str]:
+    return {"units": pair_units_attr("mass", list(dof))}
+
+
+def _as_2d(name: str, values: Any, n_time: int, n_dof: int) -> np.ndarray:
+    """Coerce a 1-D (1 DOF) or 2-D ``(time, dof)`` array-like, with clear errors."""
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"'{name}' is not numeric: {exc}") from None
+    if arr.ndim == 1 and n_dof == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape != (n_time, n_dof):
+        raise InputError(
+            f"'{name}' has shape {arr.shape}; expected ({n_time},) or ({n_time}, {n_dof}) "
+            f"to match time ({n_time} samples) and dof {n_dof}"
+        )
+    return arr
+
+
+def _mass_matrix(mass: Any, nd: int) -> np.ndarray:
+    """Scalar or (nd, nd) mass as a matrix (a scalar on every diagonal entry)."""
+    m = np.atleast_2d(np.asarray(mass, dtype=float))
+    return np.eye(nd) * m[0, 0] if m.shape == (1, 1) else m
+
+
+def make_history(
+    time: Sequence[float] | np.ndarray,
+    z: Any,
+    zdot: Any | None = None,
+    zddot: Any | None = None,
+    forces: Mapping[str, Any] | None = None,
+    *,
+    dof: Sequence[str] = DEFAULT_DOF,
+    mass: float | np.ndarray | None = None,
+    source: str = "user",
+    inputs: Mapping[str, Any] | None = None,
+    check: bool = True,
+    extra_vars: Mapping[str, tuple] | None = None,
+    extra_coords: Mapping[str, Any] | None = None,
+) -> xr.Dataset:
+    """Build a TimeHistory.
+
+    Parameters
+    ----------
+    time : array_like, shape (n,)
+        Sample times [s], strictly increasing and uniform.
+    z, zdot, zddot : array_like, shape (n,) or (n, n_dof)
+        Displacement [m or rad per DOF], velocity [m/s or rad/s] and acceleration [m/s² or
+        rad/s²]. ``zdot``/``zddot`` may be None; use
+        :func:`hybridwsi.history.estimate_derivatives` to fill them from ``z``.
+    forces : mapping of str to array_like, optional
+        Force components [N on translations, N m on rotations], e.g.
+        ``{"F_tot": ..., "F_hs": ...}``.
+    dof : sequence of str
+        Degree-of-freedom names (Capytaine's spelling, e.g. ``"Heave"``).
+    mass : float or array, optional
+        Rigid-body mass (scalar for 1 DOF [kg]) or mass matrix (n_dof, n_dof) [kg, kg m, kg m²].
+    source : str
+        What produced the history (stored in attrs).
+    inputs : mapping, optional
+        Inputs that produced it, stored as JSON in attrs for reproducibility.
+    check : bool
+        Run :func:`validate` on the result.
+    extra_vars, extra_coords : mapping, optional
+        Further variables ``{name: (dims, values, attrs)}`` and their coordinates, e.g. the
+        wave elevation ``eta(time, probe)`` [m]; stored as given.
+
+    Returns
+    -------
+    xarray.Dataset
+        Units per DOF on every ``(time, dof)`` variable (``units``, ``units_per_dof``).
+    """
+    t = np.asarray(time, dtype=float)
+    if t.ndim != 1:
+        raise InputError(f"time must be one-dimensional, got shape {t.shape}")
+    dof = list(_dofs.check_dofs(list(dof)))
+    n, nd = t.size, len(dof)
+    data_vars: dict[str, Any] = {}
+    for name, values in (("z", z), ("zdot", zdot), ("zddot", zddot)):
+        if values is None:
+            continue
+        data_vars[name] = (("time", "dof"), _as_2d(name, values, n, nd), units_attrs(name, dof))
+    force_attrs = {**units_attrs("force", dof), "role": "force"} if forces else {}
+    for name, values in (forces or {}).items():
+        data_vars[name] = (("time", "dof"), _as_2d(name, values, n, nd), dict(force_attrs))
+    if mass is not None:
+        m = _mass_matrix(mass, nd)
+        if m.shape != (nd, nd):
+            raise InputError(f"mass must be a scalar or a ({nd}, {nd}) matrix, got {m.shape}")
+        data_vars["mass"] = (("dof", "dof_j"), m, _mass_attrs(dof))
+    coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "dof": dof}
+    if "mass" in data_vars:
+        coords["dof_j"] = dof  # at construction: a later assign_coords costs a second merge
+    data_vars.update(extra_vars or {})
+    coords.update(extra_coords or {})
+    ds = xr.Dataset(
+        data_vars,
+        coords=coords,
+        attrs={
+            "hybridwsi_version": version(),
+            "source": source,
+            "inputs": json.dumps(dict(inputs or {}), default=str, sort_keys=True),
+        },
+    )
+    return validate(ds) if check else ds
+
+
+def force_names(ds: xr.Dataset) -> list[str]:
+    """Names of the force-component variables of a TimeHistory."""
+    # ds.variables: no DataArray per variable (validation runs on every simulated history)
+    return [k for k in ds.data_vars if ds.variables[k].attrs.get("role") == "force"]
+
+
+def mass_matrix(ds: xr.Dataset) -> np.ndarray | None:
+    """Rigid-body mass matrix [kg, kg m, kg m²] of a history, or None when it carries none."""
+    return None if "mass" not in ds else np.asarray(ds["mass"].values, dtype=float)
+
+
+def set_mass(ds: xr.Dataset, mass: float | np.ndarray) -> xr.Dataset:
+    """Return ``ds`` with its rigid-body mass set (scalar [kg] or (n_dof, n_dof) matrix)."""
+    nd = ds.sizes["dof"]
+    try:
+        m = _mass_matrix(mass, nd)
+    except (TypeError, ValueError):
+        raise InputError(f"mass must be a number, got {mass!r}") from None
+    if m.shape != (nd, nd) or not np.all(np.isfinite(m)) or np.any(np.diag(m) <= 0):
+        raise InputError(f"mass must be a positive scalar or a ({nd}, {nd}) matrix, got {mass!r}")
+    dof = [str(d) for d in ds["dof"].values]
+    out = ds.drop_vars([v for v in ("mass",) if v in ds])
+    out = out.assign_coords(dof_j=dof)
+    out["mass"] = (("dof", "dof_j"), m, _mass_attrs(dof))
+    return out
+
+
+def validate(
+    ds: xr.Dataset,
+    *,
+    min_samples: int = 8,
+    require_uniform: bool = True,
+    require_z: bool = True,
+) -> xr.Dataset:
+    """Check a TimeHistory and return it unchanged, or raise :class:`InputError`.
+
+    Checks: ``time`` present, finite, strictly increasing (no duplicates), uniform within
+    ``UNIFORM_RTOL`` (unless ``require_uniform=False``), at least ``min_samples`` samples;
+    ``z`` present (unless ``require_z=False``, for acceleration-only imports); every kinematic
+    and force variable finite (no NaN/inf) and shaped ``(time, dof)``.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise InputError(f"expected an xarray.Dataset TimeHistory, got {type(ds).__name__}")
+    if "time" not in ds.coords:
+        raise InputError("history has no 'time' coordinate")
+    t = np.asarray(ds["time"].values, dtype=float)
+    if t.size < min_samples:
+        raise InputError(f"history has {t.size} samples; at least {min_samples} are needed")
+    if not np.all(np.isfinite(t)):
+        i = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise InputError(f"time has a non-finite value at row {i}")
+    dt = np.diff(t)
+    if np.any(dt == 0):
+        i = int(np.flatnonzero(dt == 0)[0])
+        raise InputError(f"time is duplicated at row {i + 1} (t = {t[i]:.6g} s)")
+    if np.any(dt < 0):
+        i = int(np.flatnonzero(dt < 0)[0])
+        raise InputError(
+            f"time is not sorted: row {i + 1} (t = {t[i + 1]:.6g} s) comes before "
+            f"row {i} (t = {t[i]:.6g} s)"
+        )
+    if require_uniform and not _steps_uniform(dt):
+        raise InputError(
+            f"time is irregularly sampled (dt from {dt.min():.6g} to {dt.max():.6g} s); "
+            "resample it first (hybridwsi.history.resample) or pass --resample"
+        )
+    if "dof" not in ds.dims:
+        raise InputError("history has no 'dof' dimension")
+    if require_z and "z" not in ds:
+        raise InputError("history has no displacement variable 'z'")
+    for name in [*KINEMATICS, *force_names(ds)]:
+        if name not in ds:
+            continue
+        var = ds.variables[name]
+        if var.dims != ("time", "dof"):
+            raise InputError(f"'{name}' has dims {var.dims}; expected ('time', 'dof')")
+        bad = ~np.isfinite(var.values)
+        if bad.any():
+            i = int(np.flatnonzero(bad.any(axis=1))[0])
+            raise InputError(
+                f"'{name}' has {int(bad.sum())} NaN/inf value(s), first at row {i} "
+                f"(t = {t[i]:.6g} s)"
+            )
+    return ds
+
+
+def _steps_uniform(steps: np.ndarray) -> bool:
+    """Whether time steps [s] vary by at most ``UNIFORM_RTOL`` of their median."""
+    return bool(steps.size and (steps.max() - steps.min()) <= UNIFORM_RTOL * np.median(steps))
+
+
+def is_uniform(ds: xr.Dataset) -> bool:
+    """Whether the time step varies by less than ``UNIFORM_RTOL`` (relative)."""
+    return _steps_uniform(np.diff(np.asarray(ds["time"].values, dtype=float)))
+
+
+def time_step(ds: xr.Dataset) -> float:
+    """Mean sampling interval [s] of a (uniform) history."""
+    t = np.asarray(ds["time"].values, dtype=float)
+    return float((t[-1] - t[0]) / (t.size - 1))

@@ -1,0 +1,492 @@
+"""Delimited text tables with units in their headers: the CSV side of a TimeHistory.
+
+:class:`TextTable` reads any ``,``/``;``/tab/whitespace table as strings with file line numbers
+(for one-line error messages), :func:`split_header`/:func:`unit_factor` turn ``"z [mm]"`` into
+SI, :func:`read_csv` builds a TimeHistory from such a table and :func:`to_csv` writes one that
+:func:`read_csv` reads back exactly. Headers carry units per DOF (``z_Pitch [rad]``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from hybridwsi import dofs as _dofs
+from hybridwsi._meta import version
+from hybridwsi.errors import InputError
+from hybridwsi.history.io import NETCDF_MAGIC, atomic_write
+from hybridwsi.history.model import make_history, units_per_dof
+from hybridwsi.history.signal import finalize_import
+
+#: quantity -> accepted unit spellings (lower case) -> factor to SI
+UNIT_FACTORS: dict[str, dict[str, float]] = {
+    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
+    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
+    "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
+    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s**2": 1.0, "m/s²": 1.0, "mm/s^2": 1e-3,
+                     "mm/s2": 1e-3},
+    "force": {"n": 1.0, "kn": 1e3},
+    "angle": {"rad": 1.0, "deg": np.pi / 180},
+    "angular_velocity": {"rad/s": 1.0, "deg/s": np.pi / 180},
+    "angular_acceleration": {"rad/s^2": 1.0, "rad/s2": 1.0, "deg/s^2": np.pi / 180,
+                             "deg/s2": np.pi / 180},
+    "moment": {"nm": 1.0, "n m": 1.0, "n.m": 1.0, "n*m": 1.0, "knm": 1e3, "kn m": 1e3,
+               "kn.m": 1e3, "kn*m": 1e3},
+}
+
+
+def quantity_of(role: str, dof: str = "Heave") -> str:
+    """Physical quantity of a TimeHistory role (``time``, ``z``, ``zdot``, ``zddot``, ``force``)
+    on ``dof`` (rotations take angles and moments, :func:`hybridwsi.dofs.is_rotation`)."""
+    rot = _dofs.is_rotation(dof)
+    return {
+        "time": "time",
+        "z": "angle" if rot else "length",
+        "zdot": "angular_velocity" if rot else "velocity",
+        "zddot": "angular_acceleration" if rot else "acceleration",
+        "force": "moment" if rot else "force",
+    }[role]
+
+
+def split_header(header: str) -> tuple[str, str | None]:
+    """``"time [s]"`` -> ``("time", "s")``; also ``"z (mm)"``; no unit -> ``(header, None)``."""
+    m = re.match(r"^\s*(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$", header)
+    return (m.group(1), m.group(2)) if m else (header.strip(), None)
+
+
+def unit_factor(unit: str | None, quantity: str, column: str) -> float:
+    """Factor converting ``unit`` to SI for ``quantity``; no unit means SI already."""
+    if unit is None or unit == "":
+        return 1.0
+    table = UNIT_FACTORS[quantity]
+    key = unit.strip().lower()
+    if key not in table:
+        raise InputError(
+            f"column '{column}' has unit '{unit}', not a {quantity.replace('_', ' ')} unit "
+            f"hybridwsi knows (accepted: {', '.join(table)})"
+        )
+    return table[key]
+
+
+class TextTable:
+    """A delimited text table read as strings, with file line numbers for error messages.
+
+    Attributes
+    ----------
+    path : Path
+    columns : list of str
+        Header cells as written (e.g. ``"time [s]"``); empty trailing columns removed.
+    meta : dict
+        ``key: value`` pairs from ``# key: value`` comment lines before the header.
+    sep : str
+        The separator used (``","``, ``";"``, ``"\\t"`` or ``"whitespace"``).
+    """
+
+    def __init__(self, path: str | os.PathLike, sep: str | None = None) -> None:
+        self.path = Path(path)
+        text = read_text_file(self.path)
+        self._lines = text.splitlines()
+        self.meta: dict[str, str] = {}
+        header_idx = None
+        for i, line in enumerate(self._lines):
+            s = line.strip()
+            if not s:
+                continue
+            if s.startswith("#"):
+                key, colon, value = s.lstrip("#").partition(":")
+                if colon and header_idx is None:
+                    self.meta[key.strip()] = value.strip()
+                continue
+            header_idx = i
+            break
+        if header_idx is None:
+            raise InputError(f"{self.path.name}: no header line and no data (only comments)")
+        self.sep = sep or detect_separator(self._lines[header_idx])
+        self._header_idx = header_idx
+        self.columns, self.cells, self.line_numbers = self._parse(header_idx)
+
+    def _split(self, line: str) -> list[str]:
+        line = line.split("#", 1)[0]
+        if self.sep == "whitespace":
+            return line.split()
+        return [c.strip() for c in line.split(self.sep)]
+
+    def _parse(self, header_idx: int):
+        header = self._split(self._lines[header_idx])
+        rows, linenos = [], []
+        for i in range(header_idx + 1, len(self._lines)):
+            s = self._lines[i].strip()
+            if not s or s.startswith("#"):
+                continue
+            rows.append(self._split(self._lines[i]))
+            linenos.append(i + 1)
+        # trailing separators (DualSPHysics writes "a;b;") give empty header cells: drop them
+        keep = [j for j, h in enumerate(header) if h != ""]
+        width = len(header)
+        for row, ln in zip(rows, linenos):
+            if any(c != "" for c in row[width:]):
+                raise InputError(
+                    f"{self.path.name}: line {ln} has {len(row)} fields but the header has "
+                    f"{len(keep)} columns (mismatched lengths)"
+                )
+        for j in range(width):
+            if j not in keep and any(len(r) > j and r[j] != "" for r in rows):
+                raise InputError(f"{self.path.name}: column {j + 1} has data but no header name")
+        columns = [header[j] for j in keep]
+        if len(set(columns)) != len(columns):
+            dup = next(c for c in columns if columns.count(c) > 1)
+            raise InputError(f"{self.path.name}: column name '{dup}' appears twice in the header")
+        cells: dict[str, list[str | None]] = {c: [] for c in columns}
+        for row in rows:
+            for j, c in zip(keep, columns):
+                cells[c].append(row[j] if j < len(row) else None)  # None: row too short
+        return columns, cells, np.asarray(linenos, dtype=int)
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.line_numbers.size)
+
+    def find(self, name: str) -> str | None:
+        """Column whose full header or unit-less name matches ``name`` (case-insensitive)."""
+        want = name.strip().lower()
+        for c in self.columns:
+            if c.lower() == want:
+                return c
+        for c in self.columns:
+            if split_header(c)[0].lower() == want:
+                return c
+        return None
+
+    def require(self, name: str, what: str = "column") -> str:
+        col = self.find(name)
+        if col is None:
+            raise InputError(
+                f"{what} '{name}' not found in {self.path.name}; available columns: "
+                f"{', '.join(self.columns)}"
+            )
+        return col
+
+    def numeric(self, column: str, quantity: str | None = None, scale: float = 1.0) -> np.ndarray:
+        """Column as floats in SI (unit from the header), or a one-line InputError."""
+        raw = self.cells[column]
+        try:
+            factor = 1.0 if quantity is None else unit_factor(split_header(column)[1], quantity, column)
+        except InputError as exc:
+            raise InputError(f"{self.path.name}: {exc}") from None
+        try:  # fast path: every cell a finite number
+            out = np.asarray(raw, dtype=float)
+            if np.all(np.isfinite(out)):
+                return out * factor * scale
+        except (TypeError, ValueError):
+            out = np.empty(len(raw))
+        width = len(self.columns)
+        for i, cell in enumerate(raw):
+            ln = self.line_numbers[i]
+            if cell is None:
+                raise InputError(
+                    f"{self.path.name}: line {ln} has fewer fields than the header's {width} "
+                    f"columns (mismatched lengths; '{column}' is missing)"
+                )
+            try:
+                out[i] = float(cell)
+            except ValueError:
+                if cell == "":
+                    raise InputError(
+                        f"{self.path.name}: empty cell in column '{column}' at line {ln}"
+                    ) from None
+                raise InputError(
+                    f"{self.path.name}: non-numeric value '{cell[:30]}' in column '{column}' "
+                    f"at line {ln}"
+                ) from None
+            if not np.isfinite(out[i]):
+                what = "NaN" if np.isnan(out[i]) else "infinite"
+                raise InputError(
+                    f"{self.path.name}: {what} value '{cell}' in column '{column}' at line {ln}"
+                )
+        return out * factor * scale
+
+    def is_numeric(self, column: str) -> bool:
+        """Whether at least one cell of the column parses as a number."""
+        for cell in self.cells[column]:
+            try:
+                float(cell)  # type: ignore[arg-type]
+                return True
+            except (TypeError, ValueError):
+                continue
+        return False
+
+    def check_time(self, t: np.ndarray, min_samples: int = 8) -> None:
+        """Sorted, no duplicates, enough samples; messages give file line numbers."""
+        name = self.path.name
+        if t.size < min_samples:
+            raise InputError(f"{name}: {t.size} data rows; at least {min_samples} are needed")
+        steps = np.diff(t)
+        if np.any(steps == 0):
+            i = int(np.flatnonzero(steps == 0)[0]) + 1
+            raise InputError(
+                f"{name}: time {t[i]:.6g} s is duplicated at line {self.line_numbers[i]}"
+            )
+        if np.any(steps < 0):
+            i = int(np.flatnonzero(steps < 0)[0]) + 1
+            raise InputError(
+                f"{name}: time is not sorted: line {self.line_numbers[i]} (t = {t[i]:.6g} s) "
+                f"comes after line {self.line_numbers[i - 1]} (t = {t[i - 1]:.6g} s)"
+            )
+
+
+def detect_separator(header_line: str) -> str:
+    """``";"``, ``","``, ``"\\t"`` or ``"whitespace"``, from the header line."""
+    for sep in (";", ",", "\t"):
+        if sep in header_line:
+            return sep
+    return "whitespace"
+
+
+def read_text_file(path: Path) -> str:
+    """The file's text, or a one-line InputError (missing, empty, binary, undecodable)."""
+    if not path.exists():
+        raise InputError(f"file not found: {path}")
+    if not path.is_file():
+        raise InputError(f"not a regular file: {path}")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror or exc}") from None
+    if not data.strip():
+        raise InputError(f"{path.name} is empty")
+    if data.startswith(NETCDF_MAGIC):
+        raise InputError(f"{path.name} is a NetCDF file, not a text table (use read_history)")
+    if b"\x00" in data[:65536]:
+        raise InputError(f"{path.name} is a binary file, not a CSV/text table")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        try:
+            text = data.decode("latin-1")
+        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes every byte
+            raise InputError(f"{path.name} is not a text file") from None
+        # binary garbage decodes as latin-1 too: insist on mostly printable text
+        printable = sum(ch.isprintable() or ch in "\r\n\t" for ch in text[:4096])
+        if printable < 0.95 * min(len(text), 4096):
+            raise InputError(f"{path.name} is a binary file, not a CSV/text table") from None
+        return text
+
+
+# --------------------------------------------------------------------------------------------
+# TimeHistory <-> CSV
+# --------------------------------------------------------------------------------------------
+
+
+def read_csv(
+    path: str | os.PathLike,
+    *,
+    time: str = "time",
+    z: str | None = "z",
+    zdot: str | None = None,
+    zddot: str | None = None,
+    forces: Sequence[str] | Mapping[str, str] | str | None = None,
+    sep: str | None = None,
+    dof: str | Sequence[str] | None = None,
+    mass: float | np.ndarray | None = None,
+    resample: bool = False,
+) -> xr.Dataset:
+    """Read a TimeHistory from a delimited text file.
+
+    Parameters
+    ----------
+    path : path-like
+        Text table: one header line, ``#`` comments (anywhere; ``# key: value`` lines before
+        the header are read as metadata, e.g. ``# dof: Heave`` and ``# mass [kg]: 7.06`` as
+        written by :func:`to_csv`), separator ``,``/``;``/tab/whitespace (auto-detected from the
+        header unless ``sep`` is given; trailing separators are tolerated).
+    time, z, zdot, zddot : str
+        Column names, matched case-insensitively against the full header cell or its unit-less
+        name (``"time"`` matches ``"time [s]"``). With several DOFs each name is a stem: ``z``
+        reads ``z_Surge``, ``z_Pitch``… ``zdot``/``zddot`` default to columns named
+        ``zdot``/``zddot`` when present, else they are left out (see
+        :func:`hybridwsi.history.estimate_derivatives`).
+    forces : str, sequence of str or mapping {variable: column}, optional
+        Force columns [N, or N m on rotations]. None: every other numeric column (group of
+        ``<name>_<DOF>`` columns with several DOFs) whose unit is a force unit of its DOF or
+        absent becomes a force component named after its unit-less header; columns with other
+        known units (m, m/s, ...) are kept as extra ``(time, dof)`` variables; wholly
+        non-numeric columns are skipped.
+    sep : str, optional
+        Separator override (``","``, ``";"``, ``"\\t"`` or ``"whitespace"``).
+    dof : str or sequence of str, optional
+        Degree(s) of freedom (``"Heave"``, ``"Surge,Pitch"``; rotations take angle units).
+        Default: the ``# dof:`` metadata line, else ``Heave``.
+    mass : float or array, optional
+        Rigid-body mass [kg] or matrix (else the ``# mass [unit]:`` metadata line, if any).
+    resample : bool
+        Interpolate irregular sampling onto a uniform grid (cubic,
+        :func:`hybridwsi.history.resample`) instead of rejecting it.
+
+    Units in headers (``[unit]`` or ``(unit)``) are converted to SI: time s/ms, length m/cm/mm,
+    angle rad/deg, force N/kN, moment N m/kN m, ...; an unknown unit raises
+    :class:`InputError`.
+    """
+    table = TextTable(path, sep)
+    dof_names = list(_dofs.check_dofs(dof if dof is not None else table.meta.get("dof", "Heave")))
+    cols: dict[str, list[str]] = {"time": [table.require(time, "time column")]}
+    for role, given in (("z", z), ("zdot", zdot), ("zddot", zddot)):
+        if given is not None:
+            cols[role] = _dof_columns(table, given, dof_names, f"{role} column")
+        elif role != "z":
+            found = _dof_columns(table, role, dof_names)
+            if found is not None:
+                cols[role] = found
+    t = table.numeric(cols["time"][0], "time")
+    table.check_time(t)
+    kin = {r: _read_dofs(table, c, r, dof_names) for r, c in cols.items() if r != "time"}
+    used = {c for cs in cols.values() for c in cs}
+    force_cols, extra_cols = _force_columns(table, forces, used, dof_names)
+    force_data = {v: _read_dofs(table, c, "force", dof_names) for v, c in force_cols.items()}
+    if mass is None:
+        mass = _meta_mass(table)
+    ds = make_history(
+        t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names, mass=mass,
+        source=table.meta.get("source", f"csv:{table.path.name}"),
+        inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
+                "sep": table.sep},
+        check=False,
+    )
+    for var, cs in extra_cols.items():
+        units = [split_header(c)[1] or "" for c in cs]
+        ds[var] = (("time", "dof"), np.column_stack([table.numeric(c) for c in cs]),
+                   {"units": ", ".join(dict.fromkeys(units)), "units_per_dof": json.dumps(units)})
+    for role in ("zdot", "zddot"):
+        note = table.meta.get(f"estimated.{role}")
+        if note and role in ds:
+            ds[role].attrs["estimated"] = note
+    return finalize_import(ds, resample_to_uniform=resample, require_z=z is not None)
+
+
+def _column_names(stem: str, dofs: Sequence[str]) -> list[str]:
+    """CSV column of ``stem`` per DOF: ``stem`` alone for one DOF, else ``stem_<DOF>``."""
+    return [stem] if len(dofs) == 1 else [f"{stem}_{d}" for d in dofs]
+
+
+def _dof_columns(table: TextTable, stem: str, dofs: Sequence[str],
+                 what: str | None = None) -> list[str] | None:
+    """Columns of ``stem`` for every DOF: required when ``what`` names them, else None when
+    one is missing."""
+    names = _column_names(stem, dofs)
+    if what is not None:
+        return [table.require(n, what) for n in names]
+    found = [table.find(n) for n in names]
+    return None if any(f is None for f in found) else found  # type: ignore[return-value]
+
+
+def _read_dofs(table: TextTable, cols: Sequence[str], role: str,
+               dofs: Sequence[str]) -> np.ndarray:
+    """``(time, dof)`` values of a role in SI, each column converted with its DOF's unit."""
+    return np.column_stack([table.numeric(c, quantity_of(role, d)) for c, d in zip(cols, dofs)])
+
+
+def _flat(columns: Mapping[str, list[str]]) -> dict[str, str | list[str]]:
+    """Column record of ``inputs``: a name per role for one DOF, a list per role otherwise."""
+    return {k: v[0] if len(v) == 1 else list(v) for k, v in columns.items()}
+
+
+def _meta_mass(table: TextTable) -> float | np.ndarray | None:
+    """Mass from a ``# mass [unit]: value`` line (scalar, or JSON matrix for several DOFs)."""
+    for key, value in table.meta.items():
+        if split_header(key)[0].lower() != "mass":
+            continue
+        try:
+            return np.asarray(json.loads(value), dtype=float)
+        except (ValueError, TypeError):
+            raise InputError(f"{table.path.name}: metadata '{key}' is not a number") from None
+    return None
+
+
+def _is_force_unit(unit: str | None, dof: str) -> bool:
+    return unit is None or unit.strip().lower() in UNIT_FACTORS[quantity_of("force", dof)]
+
+
+def _force_columns(
+    table: TextTable, forces: Sequence[str] | Mapping[str, str] | str | None, used: set[str],
+    dofs: Sequence[str],
+) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    """``({variable: columns} of forces, {variable: columns} of extra variables)``."""
+    if forces is not None:
+        if isinstance(forces, str):
+            forces = [forces]
+        mapping = dict(forces) if isinstance(forces, Mapping) else {f: f for f in forces}
+        return {_var_name(v): _dof_columns(table, c, dofs, "force column")  # type: ignore[misc]
+                for v, c in mapping.items()}, {}
+    groups: dict[str, dict[str, str]] = {}
+    for col in table.columns:
+        if col in used or not table.is_numeric(col):
+            continue
+        base = split_header(col)[0]
+        if len(dofs) == 1:
+            groups.setdefault(base, {})[dofs[0]] = col
+            continue
+        for d in dofs:
+            if base.endswith(f"_{d}"):
+                groups.setdefault(base[: -len(d) - 1], {})[d] = col
+    out: dict[str, list[str]] = {}
+    extra: dict[str, list[str]] = {}
+    for stem, by_dof in groups.items():
+        if set(by_dof) != set(dofs):
+            continue  # a column of some DOFs only is not a (time, dof) variable
+        cs = [by_dof[d] for d in dofs]
+        force = all(_is_force_unit(split_header(c)[1], d) for c, d in zip(cs, dofs))
+        (out if force else extra)[_var_name(stem)] = cs
+    return out, extra
+
+
+def _var_name(name: str) -> str:
+    """A NetCDF-safe variable name (``/`` is not allowed)."""
+    return name.strip().replace("/", "_") or "unnamed"
+
+
+def to_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write a TimeHistory as CSV atomically (read back exactly by :func:`read_csv`).
+
+    The header carries units per DOF: ``time [s],z [m],...`` for one DOF, ``z_Surge [m],
+    z_Pitch [rad],F_tot_Surge [N],F_tot_Pitch [N m],...`` for several. ``#`` lines before it
+    carry the version, source, DOFs, mass, inputs and estimation notes. Values are written
+    with 17 significant digits so that a round trip is exact.
+    """
+    dof = [str(d) for d in ds["dof"].values]
+    names = [n for n in ds.data_vars if ds[n].dims == ("time", "dof")]
+    header, data = ["time [s]"], [np.asarray(ds["time"].values, dtype=float)]
+    for n in names:
+        values = np.asarray(ds[n].values, dtype=float)
+        for j, (col, unit) in enumerate(zip(_column_names(str(n), dof), units_per_dof(ds, n))):
+            header.append(f"{col} [{unit}]".replace(" []", ""))
+            data.append(values[:, j])
+    meta = [
+        "hybridwsi TimeHistory",
+        f"hybridwsi_version: {version()}",
+        f"source: {ds.attrs.get('source', 'unknown')}",
+        f"dof: {', '.join(dof)}",
+    ]
+    if "mass" in ds:
+        m = np.asarray(ds["mass"].values, dtype=float)
+        if len(dof) == 1:
+            meta.append(f"mass [{ds['mass'].attrs.get('units', 'kg')}]: {float(m.ravel()[0])!r}")
+        else:  # units per DOF pair (hybridwsi.dofs.coefficient_unit); JSON floats round-trip
+            meta.append(f"mass: {json.dumps(m.tolist())}")
+    for n in ("zdot", "zddot"):
+        if n in ds and "estimated" in ds[n].attrs:
+            meta.append(f"estimated.{n}: {ds[n].attrs['estimated']}")
+    meta.append(f"inputs: {ds.attrs.get('inputs', '{}')}")
+    table = np.column_stack(data)
+
+    def writer(tmp: str) -> None:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.writelines(f"# {line}\n" for line in meta)
+            f.write(",".join(header) + "\n")
+            np.savetxt(f, table, delimiter=",", fmt="%.17g")
+
+    return atomic_write(path, writer)

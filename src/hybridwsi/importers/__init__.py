@@ -1,0 +1,198 @@
+"""Readers of third-party force/motion files into a TimeHistory (:mod:`hybridwsi.history`).
+
+Formats (names used by :func:`detect_format`, :func:`read_history` and ``hybridwsi import
+--format``):
+
+``netcdf``
+    A TimeHistory written by :func:`hybridwsi.history.to_netcdf`.
+``csv``
+    Any delimited text table, read by :func:`hybridwsi.history.read_csv`.
+``kramer``
+    Kramer et al. (2021) floating-sphere heave decay, measured mean of 4 repetitions with its
+    95 % confidence band (``*_CI95_Normalized_every5th.csv``): :func:`read_kramer_decay`.
+``kramer-numerical``
+    The blind-comparison results of the same paper (``numerical/<CODE>_<DROP>.csv``, columns
+    ``t_s,x3_m``): :func:`read_kramer_numerical`.
+``dualsphysics-info``
+    DualSPHysics floating-body motion/force CSV (``FloatingInfo`` tool or ``FloatingMotion``
+    output; ``;``-separated, ``time [s];fvel.z [m/s];center.z [m];heave [m];face.z [m/s^2];
+    fluidforcelin.z [N]...``): :func:`read_dualsphysics_floatinginfo`.
+``dualsphysics-ace``
+    DualSPHysics ``FloatingAce_mkbound_XX.csv`` (``nstep;time [s];dt [s];predictor;acelin.x
+    [m/s^2];...``): :func:`read_dualsphysics_floatingace`
+    (:mod:`~hybridwsi.importers.dualsphysics`).
+
+All readers return SI units, validate the result (:func:`hybridwsi.history.validate`) and treat
+irregular sampling the same way: rejected with a clear message unless ``resample=True``
+(cubic interpolation onto the median step, recorded in ``attrs["resampled"]``) or
+``require_uniform=False`` (the history is returned as sampled, for inspection or plotting; the
+diagnostic needs uniform sampling).
+"""
+
+from __future__ import annotations
+
+import inspect
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import xarray as xr
+
+from hybridwsi.errors import InputError
+from hybridwsi.history import (
+    NETCDF_MAGIC,
+    TextTable,
+    finalize_import,
+    read_csv,
+    read_netcdf,
+    set_mass,
+)
+from hybridwsi.importers.dualsphysics import (
+    _key,
+    read_dualsphysics_floatingace,
+    read_dualsphysics_floatinginfo,
+)
+from hybridwsi.importers.kramer import (
+    KRAMER_DIAMETER,
+    KRAMER_DROPS,
+    KRAMER_MASS,
+    KRAMER_TE0,
+    kramer_data_dir,
+    kramer_decay_file,
+    kramer_drop_height,
+    kramer_numerical_files,
+    read_kramer_decay,
+    read_kramer_drop,
+    read_kramer_numerical,
+)
+
+# --------------------------------------------------------------------------------------------
+# Detection and dispatch
+# --------------------------------------------------------------------------------------------
+
+FORMATS = ("csv", "netcdf", "kramer", "kramer-numerical", "dualsphysics-info", "dualsphysics-ace")
+
+
+def detect_format(path: str | os.PathLike) -> str:
+    """Name of the file's format (one of :data:`FORMATS`), from its content.
+
+    NetCDF is recognised by its magic bytes; text tables by their header: ``acelin.z`` with
+    ``predictor``/``nstep`` -> ``dualsphysics-ace``; DualSPHysics floating columns (``fvel.*``,
+    ``center.*``, ``face.*``, ``fluidforcelin.*``) -> ``dualsphysics-info``;
+    ``x3_over_H0m_mean`` -> ``kramer``; exactly ``t_s,x3_m`` -> ``kramer-numerical``; any
+    other text table -> ``csv``. Missing, empty or binary files raise :class:`InputError`.
+    """
+    path = Path(path)
+    if path.is_file():
+        with open(path, "rb") as f:
+            if f.read(8).startswith(NETCDF_MAGIC):
+                return "netcdf"
+    if path.suffix.lower() in (".nc", ".nc4", ".netcdf", ".cdf"):
+        if not path.is_file():
+            raise InputError(f"file not found: {path}")
+        return "netcdf"
+    table = TextTable(path)  # raises on missing/empty/binary
+    keys = {_key(c) for c in table.columns}
+    if "acelin.z" in keys and keys & {"predictor", "nstep"}:
+        return "dualsphysics-ace"
+    if any(k.split(".")[0] in ("fvel", "center", "fcenter", "face", "fluidforcelin") for k in keys):
+        return "dualsphysics-info"
+    if "x3overh0mmean" in keys:
+        return "kramer"
+    if keys == {"ts", "x3m"}:
+        return "kramer-numerical"
+    return "csv"
+
+
+_READERS: dict[str, Callable[..., xr.Dataset]] = {
+    "csv": read_csv,
+    "kramer": read_kramer_decay,
+    "kramer-numerical": read_kramer_numerical,
+    "dualsphysics-info": read_dualsphysics_floatinginfo,
+    "dualsphysics-ace": read_dualsphysics_floatingace,
+}
+
+
+def read_history(
+    path: str | os.PathLike,
+    *,
+    format: str = "auto",
+    mass: float | None = None,
+    resample: bool = False,
+    **options: Any,
+) -> xr.Dataset:
+    """Read a TimeHistory from any supported file (the one format dispatcher).
+
+    Parameters
+    ----------
+    path : path-like
+        NetCDF (written by :func:`hybridwsi.history.to_netcdf`), plain CSV/text
+        (:func:`hybridwsi.history.read_csv`), DualSPHysics ``FloatingInfo``/``FloatingAce``
+        CSV, Kramer et al. (2021) measured or numerical decay files.
+    format : str
+        ``"auto"`` (detected from the content by :func:`detect_format`) or one of
+        :data:`FORMATS`.
+    mass : float, optional
+        Rigid-body mass [kg]; replaces the file's one when given.
+    resample : bool
+        Resample irregular sampling onto a uniform grid instead of rejecting it.
+    **options
+        Options of the chosen reader (e.g. ``time=``, ``z=``, ``forces=`` for CSV,
+        ``drop_height=`` for Kramer files, ``mkbound=`` for DualSPHysics); None values are
+        ignored, an option the reader does not take raises :class:`InputError`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The validated TimeHistory, with ``attrs["format"]`` naming the format read.
+    """
+    fmt = detect_format(path) if format == "auto" else format
+    if fmt not in FORMATS:
+        raise InputError(f"unknown format '{format}' (choose auto, {', '.join(FORMATS)})")
+    options = {k: v for k, v in options.items() if v is not None}
+    if fmt == "netcdf":
+        if options:
+            raise InputError(f"option(s) {', '.join(options)} do not apply to NetCDF files")
+        ds = read_netcdf(path)
+        ds = finalize_import(ds, resample_to_uniform=resample, require_z="zddot" not in ds)
+    else:
+        reader = _READERS[fmt]
+        params = inspect.signature(reader).parameters
+        bad = [k for k in options if k not in params]
+        if bad:
+            raise InputError(
+                f"option(s) {', '.join(bad)} do not apply to {fmt} files "
+                f"(it takes: {', '.join(p for p in params if p not in ('path', 'mass', 'resample'))})"
+            )
+        if "resample" in params:
+            options["resample"] = resample
+        if "mass" in params and mass is not None:
+            options["mass"] = mass
+        ds = reader(path, **options)
+        if resample and "resample" not in params:
+            ds = finalize_import(ds, resample_to_uniform=True, require_z="z" in ds)
+    if mass is not None:
+        ds = set_mass(ds, mass)
+    ds.attrs["format"] = fmt
+    return ds
+
+
+__all__ = [
+    "FORMATS",
+    "KRAMER_DIAMETER",
+    "KRAMER_DROPS",
+    "KRAMER_MASS",
+    "KRAMER_TE0",
+    "detect_format",
+    "kramer_data_dir",
+    "kramer_decay_file",
+    "kramer_drop_height",
+    "kramer_numerical_files",
+    "read_dualsphysics_floatingace",
+    "read_dualsphysics_floatinginfo",
+    "read_history",
+    "read_kramer_decay",
+    "read_kramer_drop",
+    "read_kramer_numerical",
+]
