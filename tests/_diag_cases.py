@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import scipy.integrate
 
-# the paper's sphere (THEORY.md §6)
+# the paper's sphere (docs/THEORY.md §6)
 M, A_INF, C_HS = 7.06, 3.50, 692.2
 
 

@@ -2,7 +2,7 @@
 
 Physics references are the parameters of the analytic forced oscillator (m, A, C of the
 paper's sphere): regressing ``F_tot - F_hs - F_A`` must return alpha = m + A, beta = 0,
-gamma = C (THEORY.md §1, case 3), and alpha = m, beta = gamma = 0 for ``F_tot`` (case 1).
+gamma = C (docs/THEORY.md §1, case 3), and alpha = m, beta = gamma = 0 for ``F_tot`` (case 1).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Stability settings (THEORY.md §4) against hand-derived results."""
+"""Stability settings (docs/THEORY.md §4) against hand-derived results."""
 
 from __future__ import annotations
 

@@ -99,10 +99,6 @@ def load_coefficients(path: str | os.PathLike | None = None) -> xr.Dataset:
     return bem.paper_coefficients()
 
 
-#: transitional name used by ``commands/hybrid.py``; :func:`load_coefficients` with no path
-paper_coefficients = load_coefficients
-
-
 def cummins_case(case: dict, config: dict) -> xr.Dataset:
     """One irregular-sea Cummins run (JONSWAP Hs, Tp, seed) -> TimeHistory with ``eta``."""
     from hybridwsi import bodies, cummins, waves

@@ -7,7 +7,7 @@ them the cache keys of the shipped coefficients, are those of the sphere-only co
 
 Capytaine is imported lazily (only by :meth:`FloatingSphere.mesh`) so that importing this
 module stays cheap. The lid of the axisymmetric mesh is built from profile points, because
-``generate_lid()`` returns an empty lid on a ``RotationSymmetricMesh`` (CAPYTAINE_NOTES.md
+``generate_lid()`` returns an empty lid on a ``RotationSymmetricMesh`` (docs/CAPYTAINE_NOTES.md
 pitfall 1).
 """
 
@@ -95,8 +95,11 @@ class FloatingSphere(Body):
     # ------------------------------------------------------------------ presets
     @classmethod
     def paper(cls) -> FloatingSphere:
-        """The paper's sphere: R = 0.15 m, m = 7.06 kg, half submerged, rho = 998.2, g = 9.81."""
-        return cls(radius=0.15, mass=7.06, rho=998.2, g=9.81)
+        """The paper's sphere (``cases/paper_sphere.toml`` [body]: R = 0.15 m, m = 7.06 kg,
+        half submerged, rho = 998.2, g = 9.81)."""
+        from hybridwsi.cases import load_case
+
+        return cls.from_dict(load_case("paper_sphere")["body"])
 
     @classmethod
     def kramer2021(cls) -> FloatingSphere:
@@ -229,7 +232,7 @@ class FloatingSphere(Body):
             Panels along a full meridian and around a parallel (Capytaine's ``mesh_sphere``
             convention), or a number of hull panels (see :meth:`resolution_for`). Default 6400.
         symmetric : bool
-            Keep Capytaine's ``RotationSymmetricMesh`` (much faster, see CAPYTAINE_NOTES.md);
+            Keep Capytaine's ``RotationSymmetricMesh`` (much faster, see docs/CAPYTAINE_NOTES.md);
             False returns plain merged meshes.
         lid : bool
             Add a lid (for irregular-frequency removal) built from profile points.

@@ -91,7 +91,7 @@ def example_history() -> xr.Dataset:
     amplitude ``F_k / (C − (m + A) ω_k² + i B ω_k)`` per harmonic), so z, ż, z̈ carry no
     integration or differentiation error. ``F_tot = m z̈`` is the total force (paper Eq. 2) and
     ``F_exc`` the excitation. With ``--known hydrostatic=692.2 --known added_mass_inf=3.5`` the
-    regression of ``F_tot`` returns α = m + A, β = 0, γ = C (THEORY.md §1, case 3); with no known
+    regression of ``F_tot`` returns α = m + A, β = 0, γ = C (docs/THEORY.md §1, case 3); with no known
     component α = m, β = γ = 0 (case 1). Three frequencies make the split identifiable.
     """
     from hybridwsi.history import make_history

@@ -75,9 +75,9 @@ def run(args: argparse.Namespace) -> int:
     elif manifest and manifest["config"].get("coeffs"):
         coeffs = read_netcdf(manifest["config"]["coeffs"])
     else:
-        from hybridwsi.sweep import paper_coefficients
+        from hybridwsi.sweep import load_coefficients
 
-        coeffs = paper_coefficients()
+        coeffs = load_coefficients()
     mass = mass_from(hists[0], coeffs)
     if mass is None:
         raise InputError("neither the histories nor the coefficients carry a 'mass'")

@@ -1,4 +1,4 @@
-"""``hybridwsi select``: rank force partitions for a hybrid solver (THEORY.md §5)."""
+"""``hybridwsi select``: rank force partitions for a hybrid solver (docs/THEORY.md §5)."""
 
 from __future__ import annotations
 

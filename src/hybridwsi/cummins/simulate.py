@@ -394,7 +394,7 @@ def simulate_batch(
     data.update(_matrix_vars(sys))
     if any(w is not None for w in waves):
         data["eta"] = (("case", "time"), eta.T, {"units": "m"})
-    from hybridwsi.history import _version
+    from hybridwsi._meta import version as _version
 
     out = xr.Dataset(
         data,

@@ -1,4 +1,4 @@
-"""Stability diagnostic of a force partition (paper Eq. 3–8, THEORY.md §2–4).
+"""Stability diagnostic of a force partition (paper Eq. 3–8, docs/THEORY.md §2–4).
 
 - :func:`regress` — force sensitivities α, β, γ of the black-box force, with HAC uncertainty and
   identifiability (:mod:`~hybridwsi.diagnostic.regression`);

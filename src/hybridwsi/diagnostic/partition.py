@@ -1,4 +1,4 @@
-"""Component selection (THEORY.md §5): which forces to model, which to leave to a surrogate.
+"""Component selection (docs/THEORY.md §5): which forces to model, which to leave to a surrogate.
 
 Candidates (built from the history's matrices and/or the coefficients, restricted to the
 history's DOFs; :func:`hybridwsi.forces.linear.known_from`):

@@ -7,7 +7,7 @@ Integrates, from the reference ``z(t0)``, ``ż(t0)`` and the known components' i
 where, by default, ``α = β = γ = 0`` and ``F_p = F_bb = F_force − Σ F_known(z_ref)`` (paper
 Eq. 3–4). With ``move_identified=RegressionResult`` the identified ``α z̈ + β ż + γ z`` are
 moved into the ODE and only the residual ``F_p = F_bb − (F̄ + α z̈_ref + β ż_ref + γ z_ref) + F̄``
-is prescribed (THEORY.md §4a), which restores the feedback that prescribing the whole force
+is prescribed (docs/THEORY.md §4a), which restores the feedback that prescribing the whole force
 removed.
 
 ``F_p(t)`` is interpolated between samples by a not-a-knot cubic spline

@@ -1,10 +1,10 @@
-"""Force-sensitivity regression of the black-box force (paper Eq. 5–7, THEORY.md §2–3).
+"""Force-sensitivity regression of the black-box force (paper Eq. 5–7, docs/THEORY.md §2–3).
 
 ``F_bb = F_force − Σ F_known`` on the reference history is fitted as
 
     F_bb,i(t) ≈ F̄_i + Σ_j α_ij z̈_j(t) + β_ij ż_j(t) + γ_ij z_j(t)
 
-with an intercept (THEORY.md §2: centring only the force biases α, β, γ whenever the
+with an intercept (docs/THEORY.md §2: centring only the force biases α, β, γ whenever the
 kinematics have a non-zero window mean). Numerics: the regressor columns are centred (which is
 exactly the intercept fit) and scaled to unit norm, and the system is solved through the SVD of
 that matrix (minimum-norm solution when it is rank-deficient), never via the normal equations.
@@ -14,7 +14,7 @@ heteroskedasticity- and autocorrelation-consistent (HAC, Newey–West with the B
 The lag is ``max(floor(4 (n/100)^(2/9)), Andrews' AR(1) plug-in)`` unless given (Andrews 1991,
 Econometrica 59: 817–858), so smooth residuals (e.g. from filtered derivatives) get long lags.
 
-Identifiability (THEORY.md §3) is reported, not assumed: singular values and condition number of
+Identifiability (docs/THEORY.md §3) is reported, not assumed: singular values and condition number of
 the centred, column-normalised regressor matrix (the intercept column excluded), the normalised
 standard errors, and — when the split is not identifiable — the combinations the data do
 determine: for near-single-frequency motion the dynamic stiffness ``γ − ω² α`` and the damping
@@ -439,7 +439,7 @@ def regress(
         Components removed with their physical sign: ``F_bb = hist[force] − Σ known``.
     fix_alpha : float or ndarray, optional
         Fixed α [kg] (e.g. ``m + A∞`` from BEM): ``α z̈`` is subtracted and only
-        ``[1, ż, z]`` is regressed (the remedy for single-frequency data, THEORY.md §3).
+        ``[1, ż, z]`` is regressed (the remedy for single-frequency data, docs/THEORY.md §3).
     hac_lags : int, optional
         Bartlett lag of the Newey–West covariance; default automatic (module docstring).
     frequency_tol : float
@@ -631,7 +631,7 @@ def frequency_domain_split(
     known: Iterable[KnownComponent | str] = (),
     omegas: Sequence[float] | None = None,
 ) -> xr.Dataset:
-    """Per-harmonic split ``F_bb(ω)/Z(ω) = −ω² α + iω β + γ`` (THEORY.md §3 remedy), 1 DOF.
+    """Per-harmonic split ``F_bb(ω)/Z(ω) = −ω² α + iω β + γ`` (docs/THEORY.md §3 remedy), 1 DOF.
 
     Both signals are detrended, Hann-windowed and Fourier-transformed at each ω (a DTFT, so ω
     need not fall on an FFT bin). The real part of the ratio is the dynamic stiffness

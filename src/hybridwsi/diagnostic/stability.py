@@ -1,4 +1,4 @@
-"""Stability of a force partition in three settings (THEORY.md §4).
+"""Stability of a force partition in three settings (docs/THEORY.md §4).
 
 The known part is written ``F_known = −A_k z̈ − B_k ż − C_k z`` (matrices n×n, from
 :func:`hybridwsi.forces.summed_linear_coefficients`); ``m`` is the rigid-body mass.
@@ -178,7 +178,7 @@ def prescribed_force_stability(
     B_k: float | np.ndarray = 0.0,
     C_k: float | np.ndarray = 0.0,
 ) -> StabilityReport:
-    """Error dynamics of the reconstruction with a prescribed force (THEORY.md §4a).
+    """Error dynamics of the reconstruction with a prescribed force (docs/THEORY.md §4a).
 
     Parameters
     ----------
@@ -237,7 +237,7 @@ def surrogate_stability(
     beta_s: float | np.ndarray,
     gamma_s: float | np.ndarray,
 ) -> StabilityReport:
-    """Continuous stability with a linearised state-dependent surrogate (THEORY.md §4b).
+    """Continuous stability with a linearised state-dependent surrogate (docs/THEORY.md §4b).
 
     ``(m + A_k − α_s) z̈ + (B_k − β_s) ż + (C_k − γ_s) z = 0``; units kg, N s/m, N/m.
     ``verdict`` is ``"stable"`` (all Re λ < 0), ``"marginal"`` (max Re λ = 0) or
@@ -385,7 +385,7 @@ def loosely_coupled_stability(
     dt: float,
     scheme: str = "semi_implicit_euler",
 ) -> StabilityReport:
-    """Stability of the lagged (explicit) surrogate coupling at step ``dt`` [s] (THEORY.md §4c).
+    """Stability of the lagged (explicit) surrogate coupling at step ``dt`` [s] (docs/THEORY.md §4c).
 
     Uses the amplification matrix of :func:`hybridwsi.diagnostic.integrators.lagged_step`
     (state ``[z, ż, z̈_lag]``). ``verdict``: ``"stable"`` (spectral radius < 1), ``"marginal"``

@@ -6,7 +6,7 @@ force components, optional ``mass``; units per DOF). The package is split along 
 - :mod:`~hybridwsi.history.model`: the data model — :func:`make_history`, :func:`validate`,
   :func:`force_names`, :func:`mass_matrix`, :func:`set_mass`, :func:`time_step`,
   :func:`is_uniform`;
-- :mod:`~hybridwsi.history.io`: atomic writers (:func:`atomic_write`, :func:`write_json`,
+- :mod:`~hybridwsi.files`: atomic writers (:func:`atomic_write`, :func:`write_json`,
   :func:`write_text`) and the NetCDF round trip (:func:`to_netcdf`, :func:`read_netcdf`);
 - :mod:`~hybridwsi.history.text`: text tables with units in their headers
   (:class:`TextTable`, :func:`read_csv`, :func:`to_csv`);
@@ -22,7 +22,7 @@ The layout is described in docs/DATA_MODEL.md.
 from __future__ import annotations
 
 from hybridwsi._meta import version
-from hybridwsi.history.io import (
+from hybridwsi.files import (
     NETCDF_MAGIC,
     atomic_write,
     read_netcdf,
@@ -65,9 +65,6 @@ from hybridwsi.history.text import (
     unit_factor,
 )
 
-#: transitional: ``hybridwsi.cummins`` still imports ``history._version``; use
-#: :func:`hybridwsi._meta.version` (remove this alias once nothing imports it)
-_version = version
 
 __all__ = [
     "DEFAULT_DOF",

@@ -20,7 +20,7 @@ import xarray as xr
 from hybridwsi import dofs as _dofs
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError
-from hybridwsi.history.io import NETCDF_MAGIC, atomic_write
+from hybridwsi.files import NETCDF_MAGIC, atomic_write
 from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
 

@@ -22,7 +22,7 @@ How the run is organised (and why):
 - Cache folder: ``cache_dir``, else ``$HYBRIDWSI_CACHE/bem``, else ``~/.cache/hybridwsi/bem``.
 - BLAS is limited to one thread during the solve (threadpoolctl; else set
   ``OPENBLAS_NUM_THREADS=1`` yourself): multi-threaded OpenBLAS makes Capytaine's symmetric
-  block products up to ~30x slower (CAPYTAINE_NOTES.md pitfall 3).
+  block products up to ~30x slower (docs/CAPYTAINE_NOTES.md pitfall 3).
 - Default ``method="direct"``: it converges faster with the mesh (A(∞) within 0.01 % of the
   analytic hemisphere value at 6400 panels, pitfall 4).
 - The ω = 0 and ω = ∞ limits are Capytaine radiation problems at ``omega=0`` and
@@ -48,17 +48,17 @@ import os
 import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import package_version, provenance, version
 from hybridwsi.bodies import Body, FloatingSphere, check_dofs
 from hybridwsi.dofs import force_unit
 from hybridwsi.errors import InputError, SolverError
-from hybridwsi.history import read_netcdf, to_netcdf
+from hybridwsi.files import read_netcdf, to_netcdf
 from hybridwsi.hydro.coefficients import pair_units_attr
 
 #: number of frequencies solved between two checkpoints
@@ -71,17 +71,27 @@ COEFF_VARS = ("added_mass", "radiation_damping", "excitation_force")
 
 
 # ---------------------------------------------------------------------------- configurations
+def _paper_bem() -> dict[str, Any]:
+    from hybridwsi.cases import load_case
+
+    return load_case("paper_sphere")["bem"]
+
+
 def paper_frequencies() -> np.ndarray:
-    """The paper's 400 log-spaced frequencies from 0.1 to 40 rad/s [rad/s]."""
-    return np.geomspace(0.1, 40.0, 400)
+    """The paper's frequencies [rad/s] (``cases/paper_sphere.toml`` [bem]: 400 log-spaced
+    from 0.1 to 40 rad/s)."""
+    cfg = _paper_bem()
+    return np.geomspace(cfg["omega_min"], cfg["omega_max"], cfg["n_omega"])
 
 
 def paper_configuration() -> dict[str, Any]:
     """The paper's BEM set-up as keyword arguments of :func:`compute`:
     ``compute(**paper_configuration())`` (R = 0.15 m sphere, m = 7.06 kg, 6400 panels with
     axial symmetry and lid, 400 frequencies 0.1–40 rad/s, infinite depth)."""
+    cfg = _paper_bem()
     return {"body": FloatingSphere.paper(), "omega": paper_frequencies(),
-            "n_panels": DEFAULT_PANELS, "water_depth": math.inf, "method": "direct"}
+            "n_panels": cfg["n_panels"], "water_depth": float(cfg["water_depth"]),
+            "method": "direct"}
 
 
 #: shipped result of ``compute(**paper_configuration())`` (see data/README.md)
@@ -396,13 +406,6 @@ def _check_depth(depth: Any, body: Body) -> float:
 
 
 # ---------------------------------------------------------------------------- hashing/cache
-def _pkg_version(name: str) -> str:
-    try:
-        return version(name)
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def _configuration(body: Body, depth, dofs, directions, mesh: dict, method, symmetric, lid,
                    low_kh) -> dict[str, Any]:
     """Every input except the frequencies (key of the resumable store): the body's
@@ -413,8 +416,7 @@ def _configuration(body: Body, depth, dofs, directions, mesh: dict, method, symm
         "dofs": list(dofs), "wave_directions": directions.tolist(),
         "mesh": {**body.mesh_description(**mesh), "symmetric": symmetric, "lid": lid},
         "solver": {"method": method, "green_function": "Delhommeau", "low_kh": low_kh},
-        "versions": {"hybridwsi": _pkg_version("hybridwsi"),
-                     "capytaine": _pkg_version("capytaine")},
+        "versions": provenance("capytaine"),
     }
 
 
@@ -672,8 +674,6 @@ def _warn_mesh_resolution(cbody, omegas: np.ndarray, depth: float, g: float) -> 
 
 # ---------------------------------------------------------------------------- assembly
 def _assemble(store: xr.Dataset, p: Plan) -> xr.Dataset:
-    from hybridwsi import __version__
-
     omega, dofs, body = p.omega, p.dofs, p.body
     w_store = store["omega"].values
     idx = [int(np.flatnonzero(_same(w_store, w))[0]) for w in omega]
@@ -740,7 +740,7 @@ def _assemble(store: xr.Dataset, p: Plan) -> xr.Dataset:
         "method": p.method, "symmetric": int(p.symmetric), "lid": int(p.lid),
         "low_kh": p.low_kh,
         "input_hash": p.input_hash, "inputs": json.dumps(p.config, sort_keys=True),
-        "hybridwsi_version": __version__, "capytaine_version": _pkg_version("capytaine"),
+        "hybridwsi_version": version(), "capytaine_version": package_version("capytaine"),
         "quality_flags": json.dumps(flags),
         "dropped_omega": json.dumps([float(w) for w in nan_w]),
     }

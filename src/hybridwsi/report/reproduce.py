@@ -82,13 +82,13 @@ class Table1Case:
         return {"F_bb": self.label, **{k: d[k] for k in keys if k in d}}
 
 
-def table1_partitions(coeffs: xr.Dataset) -> dict[str, list]:
-    """The paper's three partitions, built from the BEM coefficients (C and A∞)."""
-    from hybridwsi.forces import AddedMass, Hydrostatic
+def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dict[str, list]:
+    """The paper's three partitions: C and A∞ from the history's matrices, else from the
+    coefficients (:func:`hybridwsi.forces.linear.known_from`, the one route)."""
+    from hybridwsi.forces.linear import known_from
 
-    c = _coefficient(coeffs, "hydrostatic_stiffness")
-    a_inf = _coefficient(coeffs, "added_mass_inf")
-    return {"1": [], "2": [Hydrostatic(c)], "3": [Hydrostatic(c), AddedMass(a_inf)]}
+    hydrostatic, a_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
+    return {"1": [], "2": [hydrostatic], "3": [hydrostatic, a_inf]}
 
 
 def regress_table1(hist: xr.Dataset, partitions: dict[str, list]) -> dict[str, Table1Case]:
@@ -281,7 +281,7 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     to_netcdf(hist, out / "histories" / "bem_regular_waves.nc")
     window = hist.sel(time=slice(rw["window_start"], None))
 
-    partitions = table1_partitions(coeffs)
+    partitions = table1_partitions(coeffs, hist)
     ours = {"BEM": regress_table1(window, partitions)}
     sph, sph_note = sph_history(out, recompute=recompute_sph, path=sph_path, dp=sph_dp,
                                 mass=b["mass"], openmp=sph_openmp, progress=progress)

@@ -25,7 +25,7 @@ RHO_WATER = 998.2
 G = 9.81
 CASES = ("hydrostatic", "dam_break", "waves2d", "waves3d", "decay3d", "regular3d", "decay2d")
 
-# Kramer et al. (2021) sphere (see /work/shared/data/kramer2021_sphere_decay/README.md)
+# Kramer et al. (2021) sphere (see src/hybridwsi/data/kramer2021_sphere_decay/README.md)
 SPHERE_D = 0.300
 SPHERE_MASS = 7.056
 KRAMER_G = 9.82

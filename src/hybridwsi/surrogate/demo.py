@@ -6,7 +6,7 @@ of the loosely coupled (lagged) hybrid rollout, and the rollout is run on held-o
 
 - ``added_mass_to_network``: hydrostatics and excitation known, the network learns
   ``F_rad_inf + F_rad_mem`` from ż, z̈ windows, so it carries the added mass
-  (``alpha_s ≈ -A∞``): lagged coupling fails when ``|alpha_s| / m >= 1`` (THEORY.md §4c);
+  (``alpha_s ≈ -A∞``): lagged coupling fails when ``|alpha_s| / m >= 1`` (docs/THEORY.md §4c);
 - ``recommended``: hydrostatics, A∞ and excitation known, the network learns the radiation
   memory ``F_rad_mem`` from a ż window only (``alpha_s = 0`` by construction).
 

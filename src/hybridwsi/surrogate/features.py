@@ -7,7 +7,7 @@ a ``(window, n_channels)`` block flattened lag-major, lag 0 being the current ti
 zddot[dof...], eta[probe...]]`` restricted to the chosen ``inputs``.
 
 So the derivative of the network with respect to the lag-0 ``zddot``/``zdot``/``z`` columns is
-the surrogate's alpha_s/beta_s/gamma_s (THEORY.md §4b), and the hybrid rollout can keep a
+the surrogate's alpha_s/beta_s/gamma_s (docs/THEORY.md §4b), and the hybrid rollout can keep a
 ring buffer of ``c`` and feed it without rebuilding features.
 """
 

@@ -1,4 +1,4 @@
-"""Linearisation of a force network: alpha_s, beta_s, gamma_s by autograd (THEORY.md §4b).
+"""Linearisation of a force network: alpha_s, beta_s, gamma_s by autograd (docs/THEORY.md §4b).
 
 For ``F_net(x)`` with ``x`` containing the current (lag-0) ``zddot``, ``zdot`` and ``z``, the
 surrogate's sensitivities are exactly

@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.forces import KnownComponent, black_box_force
+from hybridwsi._meta import version
 from hybridwsi.errors import InputError
 from hybridwsi.history import atomic_write
 from hybridwsi.surrogate.features import FeatureSpec, build_features, spec_for
@@ -40,10 +41,6 @@ def _require_torch() -> None:
         raise InputError("the force network needs PyTorch: pip install 'hybridwsi[ml]'")
 
 
-def _version() -> str:
-    from hybridwsi import __version__
-
-    return __version__
 
 
 def build_mlp(n_in: int, n_out: int, hidden: Sequence[int], activation: str) -> Any:
@@ -335,7 +332,7 @@ class ForceNetwork:
         self._check_fitted()
         return {
             "format": "hybridwsi.ForceNetwork/1",
-            "hybridwsi_version": _version(),
+            "hybridwsi_version": version(),
             "torch_version": torch.__version__,
             "params": {**self.get_params(), "hidden": list(self.hidden), "inputs": list(self.inputs)},
             "spec": self.spec_.to_dict(),

@@ -18,7 +18,7 @@ Time stepping: Newmark average acceleration (trapezoidal in z, ż, and in the in
 
 Before rolling out, :func:`check_stability` linearises the network (autograd) and computes the
 spectral radius of the *same* step map with the network replaced by its Jacobian (all feature
-lags included), and THEORY.md §4b-c verdicts from :mod:`hybridwsi.diagnostic.stability`.
+lags included), and docs/THEORY.md §4b-c verdicts from :mod:`hybridwsi.diagnostic.stability`.
 A partition predicted unstable raises :class:`UnstablePartitionError` unless ``force=True``
 (then it only warns).
 """
@@ -367,10 +367,10 @@ class StabilityPrediction:
     stable : bool
         ``spectral_radius <= 1 + tol`` (and, for ``implicit``, a contracting fixed point).
     alpha_s, beta_s, gamma_s : ndarray
-        Averaged lag-0 sensitivities of the network (THEORY.md §4b).
+        Averaged lag-0 sensitivities of the network (docs/THEORY.md §4b).
     added_mass_ratio : float
         ``max |eig((m + A_k)^{-1} alpha_s)|``: >= 1 is the loosely coupled added-mass
-        instability (THEORY.md §4c), and for ``implicit`` the fixed point diverges.
+        instability (docs/THEORY.md §4c), and for ``implicit`` the fixed point diverges.
     continuous_stable : bool
         Setting (b) of :func:`hybridwsi.diagnostic.stability.surrogate_stability` (the one
         continuous test: generalised eigenvalues of ``(m + A_k − α_s, B_k − β_s, C_k − γ_s)``).
@@ -473,7 +473,7 @@ def check_stability(
     m = as_matrix(mass, nd, "mass")
     ratio = stability.added_mass_ratio(m, a_k, lin.alpha)
     stable = rho <= 1.0 + tol and (mode == "lagged" or ratio < 1.0)
-    # THEORY.md §4b-c for the network's lag-0 sensitivities: (b) is the continuous test
+    # docs/THEORY.md §4b-c for the network's lag-0 sensitivities: (b) is the continuous test
     cont = stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)
     lagged = stability.loosely_coupled_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta,
                                                  lin.gamma, dt, scheme)

@@ -56,7 +56,7 @@ def detect(path: str | Path) -> str:
 
 
 def _netcdf(path: Path, fmt: str) -> xr.Dataset:
-    from hybridwsi.history import read_netcdf
+    from hybridwsi.files import read_netcdf
 
     ds = read_netcdf(path)
     if capytaine_nc.is_capytaine(ds) or fmt == "capytaine":

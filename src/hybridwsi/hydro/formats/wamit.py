@@ -281,7 +281,7 @@ def write(coeffs: xr.Dataset, root: str | Path, *, ulen: float = 1.0) -> list[Pa
     list of pathlib.Path
         The three files written.
     """
-    from hybridwsi.history import atomic_write
+    from hybridwsi.files import atomic_write
 
     ulen = positive(ulen, "ulen")
     rho = positive(coeffs.attrs.get("rho"), "coefficients attrs 'rho'")
