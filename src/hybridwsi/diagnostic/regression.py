@@ -571,6 +571,19 @@ def _force_accuracy(value: float | Sequence[float] | np.ndarray, n_dof: int) -> 
     return acc
 
 
+def _force_errors(
+    fit: _Fit, terms: Sequence[str], n_dof: int, force_norm: np.ndarray
+) -> dict[str, np.ndarray]:
+    """:func:`force_error_for_shift` of α and γ as [influenced, radiating] matrices (inf: fixed)."""
+    eps = force_error_for_shift(fit.sv, fit.vt, fit.coef * fit.scale[:, None], force_norm,
+                                free=fit.free)
+    out = {k: np.full((n_dof, n_dof), np.inf) for k in ("alpha", "gamma")}
+    for b, name in enumerate(terms):
+        if name in out:
+            out[name] = eps[b * n_dof:(b + 1) * n_dof, :].T.copy()
+    return out
+
+
 def _blocks(
     fit: _Fit, n_dof: int, terms: Sequence[str]
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -653,6 +666,7 @@ def regress(
     comps = as_components(known)
     z, zd, zdd = kinematics(hist)
     n, n_dof = z.shape
+    accuracy = _force_accuracy(force_accuracy, n_dof)
     f_bb = black_box_force(hist, force, comps)
     fixed = fix_alpha is not None
     terms = ("beta", "gamma") if fixed else _TERMS
@@ -683,15 +697,9 @@ def regress(
     for k in terms:
         reg_rms = np.sqrt(((kin[k] - kin[k].mean(axis=0)) ** 2).mean(axis=0))  # per DOF j
         nse[k] = float(np.linalg.norm(se[k] * reg_rms[None, :]) / f_rms)
-    accuracy = _force_accuracy(force_accuracy, n_dof)
     f_gen = np.asarray(hist[force].values, dtype=float)  # the generator's force (δF_bb = δF)
     f_norm = np.linalg.norm(f_gen - f_gen.mean(axis=0), axis=0)
-    eps = force_error_for_shift(sv, fit.vt, fit.coef * fit.scale[:, None], f_norm,
-                                free=fit.free)
-    eps_terms = {k: np.full((n_dof, n_dof), np.inf) for k in ("alpha", "gamma")}
-    for b, name in enumerate(terms):
-        if name in eps_terms:
-            eps_terms[name] = eps[b * n_dof:(b + 1) * n_dof, :].T.copy()  # [influenced, radiating]
+    eps_terms = _force_errors(fit, terms, n_dof, f_norm)
     eps_dof = np.minimum(eps_terms["alpha"].min(axis=1), eps_terms["gamma"].min(axis=1))
     stderr_ok = all(nse.get(k, 0.0) < REL_STDERR_MAX for k in ("alpha", "gamma"))
     ident_dof = (eps_dof > accuracy) & stderr_ok  # NaN (constant force) is never identifiable
