@@ -71,6 +71,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "the stability assessment)")
     parser.add_argument("--fix-alpha", type=float, metavar="A",
                         help="fix alpha [kg] (e.g. m + A_inf) and regress only beta, gamma")
+    parser.add_argument("--force-accuracy", type=float, default=0.01, metavar="EPS",
+                        help="relative accuracy of the force (default 0.01, typical of CFD/SPH; "
+                        "~2e-4 for Cummins histories): alpha and gamma count as identifiable only "
+                        "when a larger force error is needed to move either by 10 %%")
     parser.add_argument("--dt", type=float, metavar="DT",
                         help="time step [s] of the coupled solver for the loosely coupled check")
     parser.add_argument("--resample", action="store_true",
@@ -239,7 +243,8 @@ def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            result = regress(hist, force=args.force, known=known, fix_alpha=args.fix_alpha)
+            result = regress(hist, force=args.force, known=known, fix_alpha=args.fix_alpha,
+                            force_accuracy=args.force_accuracy)
             stability = _stability(result, hist, known, args, notes, coeffs)
         except InputError:
             raise

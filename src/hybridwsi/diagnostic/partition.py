@@ -181,6 +181,7 @@ def select_partition(
     quadratic_drag: float | None = None,
     scheme: str = "newmark",
     reconstruct_each: bool = True,
+    force_accuracy: float = 0.01,
 ) -> pd.DataFrame:
     """Rank force partitions by the stability of their residual and reconstruction error.
 
@@ -206,6 +207,9 @@ def select_partition(
         Loosely coupled integrator (:mod:`hybridwsi.diagnostic.integrators`).
     reconstruct_each : bool
         Run the reconstruction per partition (the slow part).
+    force_accuracy : float
+        Relative accuracy of ``force`` (docs/THEORY.md §3b): the α/γ split of a residual is
+        identifiable only when a larger force error is needed to move α or γ by 10 %.
 
     Returns
     -------
@@ -234,7 +238,7 @@ def select_partition(
         known = [built[c] for c in combo]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            reg = regress(hist, force=force, known=known)
+            reg = regress(hist, force=force, known=known, force_accuracy=force_accuracy)
         row: dict[str, Any] = {
             "partition": "+".join(combo) or "(none)",
             "known": list(combo),

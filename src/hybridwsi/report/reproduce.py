@@ -91,19 +91,21 @@ def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dic
     return {"1": [], "2": [hydrostatic], "3": [hydrostatic, a_inf]}
 
 
-def regress_table1(hist: xr.Dataset, partitions: dict[str, list]) -> dict[str, Table1Case]:
+def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
+                   force_accuracy: float) -> dict[str, Table1Case]:
     """Regress F_bb of each partition on the reference motion (paper Eq. 5–7)."""
     from hybridwsi.diagnostic.regression import regress
 
     return {
-        k: Table1Case(PARTITION_LABELS[k], regress(hist, force="F_tot", known=known), known)
+        k: Table1Case(PARTITION_LABELS[k], regress(hist, force="F_tot", known=known,
+                                                   force_accuracy=force_accuracy), known)
         for k, known in partitions.items()
     }
 
 
 def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Path,
             title: str, stem: str, motion_force: str | None = "F_rad_mem",
-            bias_fraction: float = 1e-4) -> dict[str, Any]:
+            bias_fraction: float = 1e-4, force_accuracy: float = 0.01) -> dict[str, Any]:
     """Reconstruct with each partition, and with motion-dependent terms moved into the ODE.
 
     Prescribing a force as a function of time removes its feedback on the motion
@@ -128,9 +130,10 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     from hybridwsi.diagnostic.regression import regress
     from hybridwsi.report import plots  # matplotlib: imported only when drawing
 
-    ident = regress(hist, force=motion_force) if motion_force and motion_force in hist else None
+    ident = (regress(hist, force=motion_force, force_accuracy=force_accuracy)
+             if motion_force and motion_force in hist else None)
     if ident is not None and not ident.identifiable:
-        ident = regress(hist, force=motion_force, fix_alpha=0.0)
+        ident = regress(hist, force=motion_force, fix_alpha=0.0, force_accuracy=force_accuracy)
     bias = bias_fraction * float(np.abs(hist["F_tot"].values).max())
     biased = hist.assign(F_tot=hist["F_tot"] + bias)
     recs, moved, verdicts, metrics = {}, {}, {}, {}
@@ -173,7 +176,7 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
 
 
 def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
-            progress: bool) -> str:
+            progress: bool, force_accuracy: float = 0.01) -> str:
     """The paper's outlook: component selection and the hybrid (network-in-the-loop) demo.
 
     Writes ``selection.json`` (every partition of the candidate components ranked,
@@ -186,7 +189,8 @@ def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
     _log("Outlook: component selection", progress)
     # quick: a 10 s window keeps the 24 reconstructions short; the ranking needs them
     sel = hist.sel(time=slice(None, 10.0)) if quick else hist
-    table = select_partition(sel, coeffs=coeffs, dt=float(hist["time"][1] - hist["time"][0]))
+    table = select_partition(sel, coeffs=coeffs, dt=float(hist["time"][1] - hist["time"][0]),
+                             force_accuracy=force_accuracy)
     _write_json(out / "selection.json", table_to_json(table))
     cols = [c for c in ("rank", "partition", "alpha", "beta", "gamma", "spectral_radius",
                         "added_mass_ratio", "recon_nrms", "feasible", "score") if c in table]
@@ -282,12 +286,15 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     window = hist.sel(time=slice(rw["window_start"], None))
 
     partitions = table1_partitions(coeffs, hist)
-    ours = {"BEM": regress_table1(window, partitions)}
+    acc = case["force_accuracy"]  # per generator (docs/THEORY.md §3b)
+    ours = {"BEM": regress_table1(window, partitions, acc["BEM"])}
     sph, sph_note = sph_history(out, recompute=recompute_sph, path=sph_path, dp=sph_dp,
                                 mass=b["mass"], openmp=sph_openmp, progress=progress)
     if sph is not None:
-        ours["SPH"] = regress_table1(sph.sel(time=slice(rw["window_start"], None)), partitions)
-    steady = regress_table1(hist.sel(time=slice(rw["steady_state_start"], None)), partitions)
+        ours["SPH"] = regress_table1(sph.sel(time=slice(rw["window_start"], None)), partitions,
+                                     acc["SPH"])
+    steady = regress_table1(hist.sel(time=slice(rw["steady_state_start"], None)), partitions,
+                            acc["BEM"])
     _write_json(out / "table1_steady_state.json",
                 {"window_start_s": rw["steady_state_start"],
                  "BEM": {k: c.entry() for k, c in steady.items()}})
@@ -300,10 +307,11 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     _write_text(out / "table1.md", md + "\n\n" + note + "\n\n" + sph_note + "\n")
 
     _log("Fig. 2: reconstructions", progress)
-    fig2 = {"BEM": figure2(window, ours["BEM"], b["mass"], out, "BEM / Cummins", "fig2_bem")}
+    fig2 = {"BEM": figure2(window, ours["BEM"], b["mass"], out, "BEM / Cummins", "fig2_bem",
+                           force_accuracy=acc["BEM"])}
     if "SPH" in ours:
         fig2["SPH"] = figure2(sph.sel(time=slice(rw["window_start"], None)), ours["SPH"],
-                              b["mass"], out, "SPH", "fig2_sph")
+                              b["mass"], out, "SPH", "fig2_sph", force_accuracy=acc["SPH"])
     _write_json(out / "fig2_metrics.json", fig2)
 
     decay_md = "Decay validation skipped."
@@ -325,7 +333,8 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
         decay_md = val.to_markdown()
         _write_text(out / "decay_validation.md", decay_md + "\n")
 
-    outlook_md = outlook(hist, coeffs, out, quick=quick, progress=progress) if hybrid else ""
+    outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
+                          force_accuracy=acc["BEM"]) if hybrid else "")
 
     summary = {
         "hybridwsi_version": version(),
