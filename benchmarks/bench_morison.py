@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
+import timeit
 
 import numpy as np
 
@@ -25,13 +25,7 @@ from hybridwsi.waves import JONSWAP
 
 
 def _best_per_call(fn, calls: int, repeat: int) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / calls)
-    return best
+    return min(timeit.repeat(fn, number=calls, repeat=repeat)) / calls
 
 
 def loop_baseline(drag: MorisonDrag):
