@@ -235,3 +235,55 @@ def test_from_body_and_additional_damping():
         MorisonDrag(cylinder(), -1.0, RHO)
     with pytest.raises(InputError):
         MorisonDrag(cylinder(), CD, RHO, wave=Regular(8.0, 1.0), ramp=-1.0)
+
+
+def _surge_pitch_coefficients(mass: np.ndarray, a_inf: np.ndarray, c: np.ndarray):
+    """A coefficient Dataset with only what a radiation-free run needs (stored [j, i])."""
+    import xarray as xr
+
+    pair = ("radiating_dof", "influenced_dof")
+    dofs = ["Surge", "Pitch"]
+    return xr.Dataset({"added_mass_inf": (pair, a_inf.T), "hydrostatic_stiffness": (pair, c.T),
+                       "mass": (pair, mass.T)},
+                      coords={"radiating_dof": dofs, "influenced_dof": dofs},
+                      attrs={"rho": RHO, "g": 9.80665, "input_hash": "oc3-like-surge-pitch"})
+
+
+def test_drag_and_rotor_in_the_cummins_solver():
+    """OC3-sized surge–pitch system, no radiation memory: the thrust offset C⁻¹ T j is an exact
+    equilibrium (drag vanishes at rest), and the mechanical energy lost equals the work of the
+    drag and the aerodynamic damping (their power integrated over the run)."""
+    from hybridwsi import cummins
+    from hybridwsi.forces.rotor import RotorThrust
+
+    case = load_case("oc3_hywind")
+    dofs = ["Surge", "Pitch"]
+    m, zg = 8.066e6, -78.0  # the assembly's mass and CM height (docs/OC3_HYWIND.md)
+    mass = np.array([[m, m * zg], [m * zg, 6.0e10]])
+    a_inf = np.array([[8.0e6, -5.0e8], [-5.0e8, 4.0e10]])
+    c = np.array([[41180.0, -2.82e6], [-2.82e6, 1.4e9]])  # mooring + hydrostatics, Eq. 5-3 order
+    co = _surge_pitch_coefficients(mass, a_inf, c)
+    drag = MorisonDrag.from_case(case, dofs)
+    rotor = RotorThrust(8.0e5, 0.0, (-5.0, 0.0, 90.0), dofs)
+    z_eq = np.linalg.solve(c, rotor.ode_force(0.0, None, np.zeros(2), None))
+    still = cummins.simulate(co, dofs=dofs, duration=200.0, dt=0.5, z0=z_eq,
+                             forces=[drag, rotor], radiation="none")
+    np.testing.assert_allclose(still.z.values, np.broadcast_to(z_eq, still.z.shape),
+                               rtol=1e-9, atol=1e-12)
+    damped = RotorThrust(0.0, 2.0e5, (-5.0, 0.0, 90.0), dofs)
+    h = cummins.simulate(co, dofs=dofs, duration=300.0, dt=0.1, z0=[8.0, 0.03],
+                         forces=[drag, damped], radiation="none")
+    z, v, t = h.z.values, h.zdot.values, h.time.values
+    meff = mass + a_inf
+    energy = 0.5 * np.einsum("ti,ij,tj->t", v, meff, v) + 0.5 * np.einsum("ti,ij,tj->t", z, c, z)
+    work = drag.force(h) + damped.force(h)  # the state-dependent forces, from the history
+    np.testing.assert_allclose(h.F_ext.values, work, rtol=1e-9, atol=1e-6 * np.abs(work).max())
+    power = np.einsum("ti,ti->t", work, v)
+    assert np.all(power <= 0.0)
+    lost = -np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    assert energy[-1] < 0.5 * energy[0]  # the run is strongly damped
+    np.testing.assert_allclose(energy + lost, energy[0], rtol=1e-4)  # trapezoid error 2e-5
+    # the undamped thrust is time-only: the linear solver's equilibrium is the same
+    linear = cummins.simulate(co, dofs=dofs, duration=50.0, dt=0.5, z0=z_eq, forces=[rotor],
+                              radiation="none")
+    np.testing.assert_allclose(linear.z.values[-1], z_eq, rtol=1e-9)

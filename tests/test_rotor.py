@@ -21,6 +21,7 @@ def test_parked_rotor_is_no_force():
     assert not rotor.ode_force(0.0, None, v, None).any()
     assert not any(m.any() for m in rotor.linear_coefficients(3))
     assert "no force" in rotor.describe()
+    assert rotor.time_only and not rotor.time_force(np.arange(4.0)).any()
 
 
 def test_thrust_and_its_moment_about_the_reference_point():
@@ -35,6 +36,11 @@ def test_thrust_and_its_moment_about_the_reference_point():
     # a hub off the x-z plane: the thrust also yaws the platform, M_z = -y F_x
     side = RotorThrust(thrust, 0.0, (0.0, 2.0, 90.0), RIGID_DOFS)
     assert side.ode_force(0.0, None, np.zeros(6), None)[5] == pytest.approx(-2.0 * thrust)
+    # a constant force: evaluated once on a time grid
+    assert rotor.time_only
+    np.testing.assert_array_equal(rotor.time_force(np.arange(3.0), 6), np.tile(f, (3, 1)))
+    with pytest.raises(InputError):
+        rotor.time_force(np.arange(3.0), 2)
 
 
 def test_aerodynamic_damping_on_the_hub_velocity():
@@ -43,6 +49,9 @@ def test_aerodynamic_damping_on_the_hub_velocity():
     _, damping, stiffness = rotor.linear_coefficients(3)
     np.testing.assert_allclose(damping, b * np.array([[1, 0, h], [0, 0, 0], [h, 0, h * h]]))
     assert not stiffness.any()
+    assert not rotor.time_only  # the damping makes it state-dependent
+    with pytest.raises(InputError):
+        rotor.time_force(np.arange(3.0))
     v = np.array([0.3, -1.0, 0.004])  # hub velocity 0.3 + 0.004 * 90 = 0.66 m/s
     f = rotor.ode_force(0.0, None, v, None)
     np.testing.assert_allclose(f, [8.0e5 - b * 0.66, 0.0, (8.0e5 - b * 0.66) * h])

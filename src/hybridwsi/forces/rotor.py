@@ -24,7 +24,8 @@ thrust curve at the operating point.
 
 The mean thrust moves the equilibrium (OC3: ~20 m surge, ~0.05 rad pitch with the linear
 restoring); ``linear_coefficients`` hold only the damping (a constant force has no linear
-part).
+part). Without damping (and so when parked) the component is ``time_only``: a generator
+evaluates it once on its time grid and keeps its linear solver.
 """
 
 from __future__ import annotations
@@ -88,6 +89,8 @@ class RotorThrust(KnownComponent):
         r = hub_arr - ref
         #: hub fore-aft velocity per unit DOF rate = generalised force per unit hub force
         self.lever = np.array([1.0, 0.0, 0.0, 0.0, r[2], -r[1]])[index(self.dofs)]
+        # without damping the force is a constant: a generator keeps its linear solver
+        self.time_only = self.aero_damping == 0.0
 
     def _check(self, n_dof: int) -> None:
         if n_dof != len(self.dofs):
@@ -111,6 +114,13 @@ class RotorThrust(KnownComponent):
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Rotor force for rates of shape (n_dof,) or (batch, n_dof) [N, N m]."""
         return np.asarray(self.hub_force(zdot))[..., None] * self.lever
+
+    def time_force(self, t: np.ndarray, n_dof: int | None = None) -> np.ndarray:
+        """The constant ``T j`` at times ``t``, shape (nt, n_dof) (only without damping)."""
+        if not self.time_only:
+            return super().time_force(t, n_dof)
+        self._check(len(self.dofs) if n_dof is None else n_dof)
+        return np.broadcast_to(self.thrust * self.lever, (np.size(t), self.lever.size)).copy()
 
     def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """No added mass or stiffness; damping ``B_aero j jᵀ`` (the mean thrust is constant)."""
