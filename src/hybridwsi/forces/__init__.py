@@ -23,11 +23,14 @@ from hybridwsi.forces.linear import (
     parse_known,
 )
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
+from hybridwsi.forces.morison import MorisonDrag, Strips, additional_damping, profile_strips
 from hybridwsi.forces.radiation import RadiationMemory
+from hybridwsi.forces.rotor import ParkedRotor, RotorThrust, rotor_from_case
 
 __all__ = [
     "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
     "QuadraticDamping", "parse_known", "RadiationMemory", "ConstantForce", "PrescribedForce",
     "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
+    "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
 ]
