@@ -3,12 +3,15 @@
 References: the measured decay's known properties (drop height, period ratios computed in the
 data README, the 95 % band), linear theory's natural period Te0, and the analytic motion the
 hand-made DualSPHysics files were written from (z = 0.01 cos(w t), T = 0.75 s, m = 7.06 kg,
-fluid force = m (z'' + g)).
+fluid force = m (z'' + g); the jittered files: the forced oscillator of
+``data/make_dsph_jittered.py`` at DualSPHysics-like irregular output times).
 """
 
 from __future__ import annotations
 
 import filecmp
+import json
+import importlib.util
 import warnings
 from pathlib import Path
 
@@ -144,7 +147,7 @@ def test_floatingace_drops_predictor_rows_and_states_missing_z():
     assert im.detect_format(path) == "dualsphysics-ace"
     with pytest.warns(UserWarning, match="no displacement"):
         with pytest.raises(InputError, match="irregularly sampled"):
-            im.read_dualsphysics_floatingace(path, mass=M)
+            im.read_dualsphysics_floatingace(path, mass=M, resample=False)
     with pytest.warns(UserWarning):
         raw = im.read_dualsphysics_floatingace(path, mass=M, require_uniform=False)
     t = raw["time"].values
@@ -152,11 +155,71 @@ def test_floatingace_drops_predictor_rows_and_states_missing_z():
     np.testing.assert_allclose(raw["zddot"].values[:, 0], -0.01 * W**2 * np.cos(W * t), atol=1e-8)
     np.testing.assert_allclose(raw["F_tot"].values, M * raw["zddot"].values)
     assert "z" not in raw and "z and zdot" in raw.attrs["missing"]
-    with pytest.warns(UserWarning):
-        res = im.read_dualsphysics_floatingace(path, resample=True)
-    assert h.is_uniform(res)
-    tt = res["time"].values
-    np.testing.assert_allclose(res["zddot"].values[:, 0], -0.01 * W**2 * np.cos(W * tt), atol=2e-3)
+    for resample in (True, None):  # asked, and by default (solver steps within 50 % of dt)
+        with pytest.warns(UserWarning):
+            res = im.read_dualsphysics_floatingace(path, resample=resample)
+        assert h.is_uniform(res)
+        assert ("automatic" in res.attrs["resampled"]) == (resample is None)
+        tt = res["time"].values
+        np.testing.assert_allclose(res["zddot"].values[:, 0], -0.01 * W**2 * np.cos(W * tt),
+                                   atol=2e-3)
+
+
+# ------------------------------------------------------------------ DualSPHysics as it comes
+
+
+def jittered_generator():
+    """tests/data/make_dsph_jittered.py, which wrote the jittered files (analytic motion)."""
+    spec = importlib.util.spec_from_file_location("make_dsph_jittered",
+                                                  DATA / "make_dsph_jittered.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_dualsphysics_files_as_they_come_are_resampled_without_flags():
+    gen = jittered_generator()
+    info_path = DATA / "dsph_floatinginfo_jittered.csv"
+    ace_path = DATA / "dsph_floatingace_jittered.csv"
+    raw_t = np.loadtxt(info_path, delimiter=";", skiprows=1, usecols=1)
+    steps = np.diff(raw_t)
+    assert steps.min() < 0.00987 and steps.max() > 0.01013  # as irregular as a real file
+    info = im.read_history(info_path, mass=gen.M)
+    assert info.attrs["format"] == "dualsphysics-info" and h.is_uniform(info)
+    assert "automatic" in info.attrs["resampled"] and "401 samples" in info.attrs["resampled"]
+    assert h.time_step(info) == pytest.approx(0.01, rel=2e-3)
+    # the resampled history is the analytic motion on the uniform grid (heave = z - z(0))
+    t = info["time"].values
+    z, zd, zdd = gen.motion(t)
+    z0 = gen.motion(np.zeros(1))[0][0]
+    for name, exact in (("z", z - z0), ("zdot", zd), ("zddot", zdd)):
+        np.testing.assert_allclose(info[name].values[:, 0], exact, rtol=0,
+                                   atol=1e-6 * np.ptp(exact), err_msg=name)
+    np.testing.assert_allclose(info["F_fluid"].values[:, 0], gen.M * (zdd + gen.G),
+                               rtol=0, atol=1e-6 * gen.M * np.ptp(zdd))
+    with pytest.warns(UserWarning, match="no displacement"):
+        ace = im.read_history(ace_path)
+    assert ace.attrs["format"] == "dualsphysics-ace" and "automatic" in ace.attrs["resampled"]
+    exact = gen.motion(ace["time"].values)[2]
+    np.testing.assert_allclose(ace["zddot"].values[:, 0], exact, rtol=0, atol=1e-6 * np.ptp(exact))
+
+
+def test_dualsphysics_gaps_and_generic_csv_jitter_are_still_refused(tmp_path):
+    lines = (DATA / "dsph_floatinginfo_jittered.csv").read_text().splitlines()
+    gap = tmp_path / "FloatingInfo_gap.csv"
+    gap.write_text("\n".join(lines[:100] + lines[101:]) + "\n")  # one output missing
+    with pytest.raises(InputError, match="irregularly sampled"):
+        im.read_history(gap)
+    assert h.is_uniform(im.read_history(gap, resample=True))  # when asked
+    with pytest.raises(InputError, match="irregularly sampled"):
+        im.read_dualsphysics_floatinginfo(DATA / "dsph_floatinginfo_jittered.csv",
+                                          resample=False)
+    generic = tmp_path / "generic.csv"
+    t = 0.01 * np.arange(100) + np.where(np.arange(100) % 2, 1e-4, 0.0)
+    generic.write_text("time [s],z [m]\n" + "\n".join(f"{a},{np.sin(a)}" for a in t) + "\n")
+    assert im.detect_format(generic) == "csv"
+    with pytest.raises(InputError, match="irregularly sampled"):
+        im.read_history(generic)
 
 
 # ------------------------------------------------------------------ dispatch
@@ -177,3 +240,25 @@ def test_read_history_dispatch_and_options(tmp_path):
     forced = im.read_history(DATA / "dsph_floatinginfo.csv", format="csv", time="time",
                             z="heave", forces=["fluidforcelin.z"])
     assert h.force_names(forced) == ["fluidforcelin.z"]
+
+
+def test_import_and_diagnose_take_jittered_dualsphysics_without_flags(tmp_path, capsys):
+    from hybridwsi.cli import main
+
+    gen = jittered_generator()
+    src = DATA / "dsph_floatinginfo_jittered.csv"
+    nc = tmp_path / "h.nc"
+    assert main(["import", str(src), "--out", str(nc), "--mass", str(gen.M)]) == 0
+    notes = [ln for ln in capsys.readouterr().out.splitlines() if "resampled" in ln]
+    assert len(notes) == 1 and "automatic" in notes[0]
+    assert h.is_uniform(im.read_history(nc))
+    res = tmp_path / "r.json"
+    assert main(["diagnose", str(src), "--mass", str(gen.M), "--known", f"hydrostatic={gen.C}",
+                 "--known", f"added_mass_inf={gen.A}", "--json", str(res)]) == 0
+    notes = [ln for ln in capsys.readouterr().out.splitlines() if "resampled" in ln]
+    assert len(notes) == 1 and notes[0].startswith("note: time resampled")
+    # F_tot - F_hs - F_A = (m + A) z'' + C z on the resampled grid (docs/THEORY.md §1, case 3)
+    out = json.loads(res.read_text())
+    assert out["alpha"] == pytest.approx(gen.M + gen.A, rel=1e-6)
+    assert out["gamma"] == pytest.approx(gen.C, rel=1e-6)
+    assert abs(out["beta"]) < 1e-6 * gen.C

@@ -21,12 +21,19 @@ Formats (names used by :func:`detect_format`, :func:`read_history` and ``hybridw
     DualSPHysics ``FloatingAce_mkbound_XX.csv`` (``nstep;time [s];dt [s];predictor;acelin.x
     [m/s^2];...``): :func:`read_dualsphysics_floatingace`
     (:mod:`~hybridwsi.importers.dualsphysics`).
+``openfast``
+    OpenFAST output, text ``.out`` or binary ``.outb`` (read with openfast-io, extra
+    ``hybridwsi[openfast]``): platform DOFs, their rates and loads,
+    :func:`read_openfast` (:mod:`~hybridwsi.importers.openfast`).
 
 All readers return SI units, validate the result (:func:`hybridwsi.history.validate`) and treat
 irregular sampling the same way: rejected with a clear message unless ``resample=True``
 (cubic interpolation onto the median step, recorded in ``attrs["resampled"]``) or
 ``require_uniform=False`` (the history is returned as sampled, for inspection or plotting; the
-diagnostic needs uniform sampling).
+diagnostic needs uniform sampling). The one exception is DualSPHysics output, whose times
+jitter by a solver step by construction: it is resampled automatically when its steps stay
+within :data:`~hybridwsi.importers.dualsphysics.OUTPUT_JITTER` of their median (and said so in
+``attrs["resampled"]``); larger gaps are rejected like any other irregular file.
 """
 
 from __future__ import annotations
@@ -49,6 +56,7 @@ from hybridwsi.history import (
     set_mass,
 )
 from hybridwsi.importers.dualsphysics import (
+    OUTPUT_JITTER,
     _key,
     read_dualsphysics_floatingace,
     read_dualsphysics_floatinginfo,
@@ -66,18 +74,24 @@ from hybridwsi.importers.kramer import (
     read_kramer_drop,
     read_kramer_numerical,
 )
+from hybridwsi.importers.openfast import is_openfast_output, read_openfast
 
 # --------------------------------------------------------------------------------------------
 # Detection and dispatch
 # --------------------------------------------------------------------------------------------
 
-FORMATS = ("csv", "netcdf", "kramer", "kramer-numerical", "dualsphysics-info", "dualsphysics-ace")
+FORMATS = ("csv", "netcdf", "kramer", "kramer-numerical", "dualsphysics-info", "dualsphysics-ace",
+           "openfast")
+#: option names that mean the same thing to every reader (the CLI's --dofs and read_csv's dof)
+_SYNONYMS = (("dof", "dofs"),)
 
 
 def detect_format(path: str | os.PathLike) -> str:
     """Name of the file's format (one of :data:`FORMATS`), from its content.
 
-    NetCDF is recognised by its magic bytes; text tables by their header: ``acelin.z`` with
+    NetCDF is recognised by its magic bytes; OpenFAST output by its binary header (``.outb``)
+    or its text header (:func:`~hybridwsi.importers.openfast.is_openfast_output`); text
+    tables by their header: ``acelin.z`` with
     ``predictor``/``nstep`` -> ``dualsphysics-ace``; DualSPHysics floating columns (``fvel.*``,
     ``center.*``, ``face.*``, ``fluidforcelin.*``) -> ``dualsphysics-info``;
     ``x3_over_H0m_mean`` -> ``kramer``; exactly ``t_s,x3_m`` -> ``kramer-numerical``; any
@@ -92,6 +106,8 @@ def detect_format(path: str | os.PathLike) -> str:
         if not path.is_file():
             raise InputError(f"file not found: {path}")
         return "netcdf"
+    if is_openfast_output(path):
+        return "openfast"
     table = TextTable(path)  # raises on missing/empty/binary
     keys = {_key(c) for c in table.columns}
     if "acelin.z" in keys and keys & {"predictor", "nstep"}:
@@ -111,6 +127,7 @@ _READERS: dict[str, Callable[..., xr.Dataset]] = {
     "kramer-numerical": read_kramer_numerical,
     "dualsphysics-info": read_dualsphysics_floatinginfo,
     "dualsphysics-ace": read_dualsphysics_floatingace,
+    "openfast": read_openfast,
 }
 
 
@@ -129,18 +146,20 @@ def read_history(
     path : path-like
         NetCDF (written by :func:`hybridwsi.history.to_netcdf`), plain CSV/text
         (:func:`hybridwsi.history.read_csv`), DualSPHysics ``FloatingInfo``/``FloatingAce``
-        CSV, Kramer et al. (2021) measured or numerical decay files.
+        CSV, Kramer et al. (2021) measured or numerical decay files, OpenFAST ``.out``/``.outb``.
     format : str
         ``"auto"`` (detected from the content by :func:`detect_format`) or one of
         :data:`FORMATS`.
     mass : float, optional
         Rigid-body mass [kg]; replaces the file's one when given.
     resample : bool
-        Resample irregular sampling onto a uniform grid instead of rejecting it.
+        Resample irregular sampling onto a uniform grid instead of rejecting it. False keeps
+        the reader's own default (DualSPHysics files: resampled when their steps only jitter).
     **options
         Options of the chosen reader (e.g. ``time=``, ``z=``, ``forces=`` for CSV,
-        ``drop_height=`` for Kramer files, ``mkbound=`` for DualSPHysics); None values are
-        ignored, an option the reader does not take raises :class:`InputError`.
+        ``drop_height=`` for Kramer files, ``mkbound=`` for DualSPHysics, ``dofs=`` for
+        OpenFAST; ``dof`` and ``dofs`` are synonyms); None values are ignored, an option the
+        reader does not take raises :class:`InputError`.
 
     Returns
     -------
@@ -159,14 +178,17 @@ def read_history(
     else:
         reader = _READERS[fmt]
         params = inspect.signature(reader).parameters
+        for a, b in (*_SYNONYMS, *((b, a) for a, b in _SYNONYMS)):
+            if a in options and a not in params and b in params:
+                options[b] = options.pop(a)
         bad = [k for k in options if k not in params]
         if bad:
             raise InputError(
                 f"option(s) {', '.join(bad)} do not apply to {fmt} files "
                 f"(it takes: {', '.join(p for p in params if p not in ('path', 'mass', 'resample'))})"
             )
-        if "resample" in params:
-            options["resample"] = resample
+        if "resample" in params and resample:
+            options["resample"] = True  # else the reader's default (automatic for DualSPHysics)
         if "mass" in params and mass is not None:
             options["mass"] = mass
         ds = reader(path, **options)
@@ -184,6 +206,7 @@ __all__ = [
     "KRAMER_DROPS",
     "KRAMER_MASS",
     "KRAMER_TE0",
+    "OUTPUT_JITTER",
     "detect_format",
     "kramer_data_dir",
     "kramer_decay_file",
@@ -195,4 +218,5 @@ __all__ = [
     "read_kramer_decay",
     "read_kramer_drop",
     "read_kramer_numerical",
+    "read_openfast",
 ]

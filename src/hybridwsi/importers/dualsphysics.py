@@ -1,8 +1,15 @@
 """DualSPHysics floating-body output: ``FloatingInfo`` motion/force and ``FloatingAce`` files.
 
 Formats ``dualsphysics-info`` (:func:`read_dualsphysics_floatinginfo`) and
-``dualsphysics-ace`` (:func:`read_dualsphysics_floatingace`); heave only, SI units, the same
-treatment of irregular sampling as every reader (:func:`hybridwsi.history.finalize_import`).
+``dualsphysics-ace`` (:func:`read_dualsphysics_floatingace`); heave only, SI units.
+
+DualSPHysics writes each output at the first solver step on or after the output instant (and
+``FloatingAce`` at every solver step), so its times are irregular by construction: a real
+``FloatingAce`` file has steps from 0.00986 to 0.010136 s. Such jitter is resampled
+automatically (cubic, onto the median step, :func:`hybridwsi.history.resample`; recorded in
+``attrs["resampled"]``); steps further than :data:`OUTPUT_JITTER` from the median are gaps,
+rejected unless ``resample=True`` like any irregular file
+(:func:`hybridwsi.history.finalize_import`).
 """
 
 from __future__ import annotations
@@ -15,7 +22,11 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history import TextTable, finalize_import, make_history, split_header
+from hybridwsi.history import TextTable, finalize_import, is_uniform, make_history, split_header
+
+#: relative deviation of a time step from the median step that still counts as DualSPHysics'
+#: output jitter (one solver step at most; resampled automatically); larger ones are gaps
+OUTPUT_JITTER = 0.5
 
 # Column aliases, compared after :func:`_key` (lower case, no unit, no spaces/underscores).
 _DSPH_TIME = ("time", "t")
@@ -77,7 +88,7 @@ def read_dualsphysics_floatinginfo(
     mkbound: int | None = None,
     mass: float | None = None,
     *,
-    resample: bool = False,
+    resample: bool | None = None,
     require_uniform: bool = True,
 ) -> xr.Dataset:
     """Heave motion and fluid force of a DualSPHysics floating body.
@@ -98,9 +109,12 @@ def read_dualsphysics_floatinginfo(
         Body mass [kg]. When given (and ``face.z`` is present) ``F_tot = m zddot`` is added, the
         total force consistent with the motion (paper Eq. 2). ``F_fluid`` is the fluid force
         alone (pressure + viscous, including buoyancy but not gravity).
-    resample, require_uniform : bool
-        See the module docstring (DualSPHysics saves at the first step after each output
-        instant, so its times are slightly irregular).
+    resample : bool, optional
+        None (default): resample when the irregularity is DualSPHysics' output jitter (see the
+        module docstring), reject larger gaps; True: resample any irregular time; False:
+        reject any irregular time.
+    require_uniform : bool
+        False returns an irregular file as sampled (no automatic resampling).
     """
     table = TextTable(path)
     rows = _select_mkbound(table, mkbound)
@@ -131,14 +145,14 @@ def read_dualsphysics_floatinginfo(
         ds["F_fluid"].attrs["description"] = f"fluid force from '{fcol}' (no gravity)"
     if "F_tot" in ds:
         ds["F_tot"].attrs["description"] = "mass x zddot (total force, paper Eq. 2)"
-    return finalize_import(ds, resample_to_uniform=resample, require_uniform=require_uniform)
+    return _finalize(ds, resample, require_uniform)
 
 
 def read_dualsphysics_floatingace(
     path: str | os.PathLike,
     mass: float | None = None,
     *,
-    resample: bool = False,
+    resample: bool | None = None,
     require_uniform: bool = True,
 ) -> xr.Dataset:
     """Heave acceleration (and ``F_tot = m zddot``) from DualSPHysics ``FloatingAce`` output.
@@ -146,7 +160,8 @@ def read_dualsphysics_floatingace(
     The file (``FloatingAce_mkbound_XX.csv``, header ``nstep;time [s];dt [s];predictor;
     acelin.x [m/s^2];acelin.y [m/s^2];acelin.z [m/s^2];aceang.x [rad/s^2];...``) is written
     at irregular solver steps. Rows whose ``predictor`` flag is true (``True``/``1``) are the
-    predictor half of a predictor-corrector step and are dropped.
+    predictor half of a predictor-corrector step and are dropped. ``resample`` and
+    ``require_uniform`` as in :func:`read_dualsphysics_floatinginfo`.
 
     The file holds no displacement or velocity: the history has no ``z``/``zdot`` (this is
     stated in ``attrs["missing"]`` and in a :class:`UserWarning`); merge it with the
@@ -183,8 +198,25 @@ def read_dualsphysics_floatingace(
         ds["F_tot"].attrs["description"] = "mass x zddot (total force, paper Eq. 2)"
     warnings.warn(f"{table.path.name}: no displacement: the history lacks {missing}", UserWarning,
                   stacklevel=2)
-    return finalize_import(ds, resample_to_uniform=resample, require_uniform=require_uniform,
-                           require_z=False)
+    return _finalize(ds, resample, require_uniform, require_z=False)
+
+
+def _is_output_jitter(ds: xr.Dataset) -> bool:
+    """Whether every time step [s] lies within :data:`OUTPUT_JITTER` of the median step."""
+    steps = np.diff(np.asarray(ds["time"].values, dtype=float))
+    median = float(np.median(steps))
+    return bool(np.all(np.abs(steps - median) <= OUTPUT_JITTER * median))
+
+
+def _finalize(ds: xr.Dataset, resample: bool | None, require_uniform: bool,
+              require_z: bool = True) -> xr.Dataset:
+    """:func:`finalize_import` with DualSPHysics' automatic resampling of output jitter."""
+    auto = resample is None and require_uniform and not is_uniform(ds) and _is_output_jitter(ds)
+    out = finalize_import(ds, resample_to_uniform=bool(resample) or auto,
+                          require_uniform=require_uniform, require_z=require_z)
+    if auto:
+        out.attrs["resampled"] += " (automatic: DualSPHysics output times jitter)"
+    return out
 
 
 def _check_time_rows(table: TextTable, t: np.ndarray, rows: np.ndarray) -> None:
