@@ -42,7 +42,7 @@ from hybridwsi.forces import (
     RadiationMemory,
     black_box_force,
 )
-from hybridwsi.history import estimate_derivatives, make_history, mean_crossing_period
+from hybridwsi.history import estimate_derivatives, make_history
 from hybridwsi.importers.kramer import KRAMER_DROPS, read_kramer_drop
 
 DROPS = KRAMER_DROPS
@@ -427,6 +427,7 @@ def fit_output_error(setup: KramerSetup, targets: dict[str, tuple[np.ndarray, np
                         method="lm", max_nfev=40)
     info = {"cost_start": float(0.5 * np.sum(evaluate(p0)[0] ** 2)), "cost": float(sol.cost),
             "nfev": int(sol.nfev), "status": int(sol.status), "free": list(free),
+            "drops": drops, "n_points": int(sol.fun.size),
             "rms_fit": float(np.sqrt(2 * sol.cost / sol.fun.size))}
     return coefs(sol.x), lead_of(sol.x), info
 
@@ -576,7 +577,7 @@ def decay_measures(t: np.ndarray, zn: np.ndarray, setup: KramerSetup,
 FIT_DT = {False: 0.004, True: 0.008}
 #: structured terms fitted by simulation error (module doc), and the release lead with them
 STRUCTURED_FREE = STRUCTURED_TERMS
-#: hybrid rollout step [s]: the measured data's step (the network saw that sampling)
+#: length [s] of the evaluation runs
 ROLL_DURATION = 4.0  # s > 5 Te0 = 3.78 s
 
 
@@ -609,7 +610,6 @@ def run_study(*, quick: bool = False, progress: bool = False,
     Returns a dict with ``results`` (the JSON of :func:`run_kramer_hybrid`), ``curves``
     (for the figure) and ``models`` (the fitted objects, for tests).
     """
-    from hybridwsi.report.validation import rms_heave_error  # noqa: F401 - scoring module
 
     def log(msg: str) -> None:
         if progress:
