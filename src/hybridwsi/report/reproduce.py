@@ -333,6 +333,13 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
         decay_md = val.to_markdown()
         _write_text(out / "decay_validation.md", decay_md + "\n")
 
+    kramer_md = ""
+    if decay and hybrid:  # the hybrid on the measured decays (leave one drop out)
+        from hybridwsi.report.kramer_hybrid import run_kramer_hybrid
+
+        _log("Kramer hybrid: leave one drop out", progress)
+        kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)
+
     outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
                           force_accuracy=acc["BEM"]) if hybrid else "")
 
@@ -346,7 +353,8 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     }
     _write_json(out / "summary.json", summary)
     _write_text(out / "report.md", report_markdown(summary, md, note, sph_note, fig2, decay_md,
-                                                   "SPH" in ours, decay) + "\n" + outlook_md)
+                                                   "SPH" in ours, decay)
+                + "\n" + kramer_md + "\n" + outlook_md)
     _log(f"done in {summary['wall_time_s']:.0f} s → {out}/report.md", progress)
     return summary
 
