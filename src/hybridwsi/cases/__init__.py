@@ -69,7 +69,10 @@ def body_from_case(case: Mapping[str, Any]):
     if not isinstance(spec, Mapping):
         raise InputError("case has no [body] table")
     if "type" not in spec:
-        return FloatingSphere(**spec)
+        try:
+            return FloatingSphere(**spec)
+        except TypeError as exc:
+            raise InputError(f"[body] without a type is a FloatingSphere: {exc}") from None
     env = case.get("environment", {})
     spec = {**spec, "name": spec.get("name", case.get("name"))}
     if "hull" in spec:

@@ -110,11 +110,11 @@ def natural_frequencies(coeffs: xr.Dataset, stiffness: np.ndarray | None = None,
     mass = co.matrix(coeffs, "mass", names)
     c = co.matrix(coeffs, "hydrostatic_stiffness", names) if hydrostatics else np.zeros((n, n))
     if stiffness is not None:
-        k = np.asarray(stiffness, dtype=float)
-        if k.shape != (n, n) or not np.all(np.isfinite(k)):
+        extra = np.asarray(stiffness, dtype=float)
+        if extra.shape != (n, n) or not np.all(np.isfinite(extra)):
             raise InputError(f"stiffness must be a finite {n}x{n} matrix for DOFs {names}, "
-                             f"got shape {k.shape}")
-        c = c + k
+                             f"got shape {extra.shape}")
+        c = c + extra
 
     def inertia(w: float) -> np.ndarray:
         return mass + co.at_frequency(coeffs, "added_mass", w, names)
