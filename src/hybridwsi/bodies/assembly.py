@@ -47,6 +47,21 @@ class MassItem:
         object.__setattr__(self, "inertia_about_cm", as_tuple_matrix(
             inertia_matrix(f"inertia_about_cm of {self.name}", self.inertia_about_cm)))
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> MassItem:
+        """Inverse of :meth:`to_dict`; also takes the case files' ``inertia`` key for
+        ``inertia_about_cm``."""
+        kwargs = dict(data)
+        if "inertia" in kwargs:
+            if "inertia_about_cm" in kwargs:
+                raise InputError(f"mass item {kwargs.get('name')!r}: give inertia or "
+                                 "inertia_about_cm, not both")
+            kwargs["inertia_about_cm"] = kwargs.pop("inertia")
+        try:
+            return cls(**kwargs)
+        except TypeError as exc:
+            raise InputError(f"cannot build a MassItem from {data}: {exc}") from None
+
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "mass": self.mass, "cm": list(self.cm),
                 "inertia_about_cm": [list(row) for row in self.inertia_about_cm]}
@@ -89,7 +104,8 @@ class RigidAssembly(Body):
     def __post_init__(self) -> None:
         if not isinstance(self.hull, Body):
             raise InputError(f"hull must be a hybridwsi.bodies.Body, got {type(self.hull).__name__}")
-        items = tuple(it if isinstance(it, MassItem) else MassItem(**it) for it in self.items)
+        items = tuple(it if isinstance(it, MassItem) else MassItem.from_dict(it)
+                      for it in self.items)
         object.__setattr__(self, "items", items)
         ref = (tuple(float(v) for v in self.parts()[1]) if self.reference_point is None
                else vector3("reference_point", self.reference_point))
@@ -101,7 +117,7 @@ class RigidAssembly(Body):
         """Inverse of :meth:`to_dict`."""
         try:
             return cls(hull=body_from_dict(data["hull"]),
-                       items=tuple(MassItem(**it) for it in data.get("items", ())),
+                       items=tuple(MassItem.from_dict(it) for it in data.get("items", ())),
                        reference_point=data.get("reference_point"), name=data.get("name"))
         except (KeyError, TypeError) as exc:
             raise InputError(f"cannot build a RigidAssembly from {data}: {exc}") from None

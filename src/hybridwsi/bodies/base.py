@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -158,7 +159,10 @@ class Body(ABC):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        _BODY_TYPES[cls.__name__] = cls  # body_from_dict dispatches on the class name
+        # body_from_dict dispatches on the class name or its snake_case spelling (the case
+        # files' style: "rigid_assembly"; "axisymmetric" for AxisymmetricBody)
+        for alias in type_aliases(cls.__name__):
+            _BODY_TYPES[alias] = cls
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Body:
@@ -416,11 +420,22 @@ def disc_lid(radius: float, n_radial: int, n_around: int):
     return lid.with_normal_vector_going_down()
 
 
+def type_aliases(class_name: str) -> tuple[str, ...]:
+    """Names :func:`body_from_dict` accepts for a body class: the class name, its snake_case
+    spelling and that without a trailing ``_body`` (``"AxisymmetricBody"``,
+    ``"axisymmetric_body"``, ``"axisymmetric"``)."""
+    snake = re.sub(r"(?<!^)(?=[A-Z])", "_", class_name).lower()
+    return tuple(dict.fromkeys((class_name, snake, snake.removesuffix("_body"))))
+
+
 def body_from_dict(data: dict[str, Any]) -> Body:
-    """Rebuild any body from its :meth:`Body.to_dict` (dispatch on ``"type"``)."""
+    """Rebuild any body from its :meth:`Body.to_dict` (dispatch on ``"type"``: a class name or
+    its snake_case alias, :func:`type_aliases`)."""
     if not isinstance(data, dict) or "type" not in data:
         raise InputError(f"a body description needs a 'type' entry, got {data!r}")
     cls = _BODY_TYPES.get(str(data["type"]))
     if cls is None:
-        raise InputError(f"unknown body type {data['type']!r}; choose from {sorted(_BODY_TYPES)}")
+        names = sorted({c.__name__ for c in _BODY_TYPES.values()})
+        raise InputError(f"unknown body type {data['type']!r}; choose from {names} (or their "
+                         "snake_case names)")
     return cls.from_dict(data)

@@ -1,4 +1,5 @@
-"""``hybridwsi bem``: Capytaine coefficients of a floating body (defaults: the paper's sphere)."""
+"""``hybridwsi bem``: Capytaine coefficients of a floating body (defaults: the paper's sphere;
+``--case NAME`` a built-in case such as ``oc3_hywind``)."""
 
 from __future__ import annotations
 
@@ -15,32 +16,49 @@ DESCRIPTION = (
     "Solve the radiation/diffraction problems of a floating body with Capytaine (symmetric mesh "
     "with lid where the body allows it, direct method) and write the coefficient NetCDF. "
     "Defaults reproduce the paper: a sphere R = 0.15 m, m = 7.06 kg, 6400 panels, 400 "
-    "frequencies 0.1-40 rad/s, deep water. --body takes any other body (a JSON description, "
-    "hybridwsi.bodies.body_from_dict). Results are cached (~/.cache/hybridwsi/bem or "
-    "$HYBRIDWSI_CACHE/bem) and an interrupted run resumes where it stopped."
+    "frequencies 0.1-40 rad/s, deep water. --case NAME takes the body and the [bem] table of a "
+    "built-in case (e.g. oc3_hywind, paper_sphere); --body takes any other body (a JSON "
+    "description, hybridwsi.bodies.body_from_dict). Results are cached (~/.cache/hybridwsi/bem "
+    "or $HYBRIDWSI_CACHE/bem), shipped results are used when the inputs match, and an "
+    "interrupted run resumes where it stopped."
 )
+#: paper defaults of the options that --case replaces (None in the parser: to detect clashes)
+SPHERE_DEFAULTS = {"radius": 0.15, "mass": 7.06, "omega_min": 0.1, "omega_max": 40.0,
+                   "n_omega": 400, "depth": math.inf, "rho": 998.2, "g": 9.81,
+                   "method": "direct"}
+#: options that describe the problem (a case file gives all of them)
+PROBLEM_OPTIONS = ("body", *SPHERE_DEFAULTS, "panels", "panel_size", "dofs")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--case", default=None,
+                        help="built-in case (hybridwsi.cases): its body and [bem] table; not "
+                             "combined with the body, frequency and mesh options")
+    parser.add_argument("--quick", action="store_true",
+                        help="with --case: the coarse [bem_quick] table instead of [bem]")
     parser.add_argument("--body", default=None,
                         help="body description: a JSON file or JSON text with a 'type' "
                              "(FloatingSphere, AxisymmetricBody, MeshBody, RigidAssembly); "
                              "replaces --radius/--mass/--rho/--g")
-    parser.add_argument("--radius", type=float, default=0.15, help="sphere radius [m]")
-    parser.add_argument("--mass", type=float, default=7.06, help="sphere mass [kg]")
+    parser.add_argument("--radius", type=float, default=None, help="sphere radius [m] (0.15)")
+    parser.add_argument("--mass", type=float, default=None, help="sphere mass [kg] (7.06)")
     parser.add_argument("--panels", type=int, default=None,
                         help="approximate hull panel count (sphere default 6400)")
     parser.add_argument("--panel-size", type=float, default=None,
                         help="hull panel size [m] (instead of --panels)")
     parser.add_argument("--dofs", default=None,
                         help="comma-separated DOFs, e.g. Surge,Heave,Pitch (default: the body's)")
-    parser.add_argument("--omega-min", type=float, default=0.1, help="lowest frequency [rad/s]")
-    parser.add_argument("--omega-max", type=float, default=40.0, help="highest frequency [rad/s]")
-    parser.add_argument("--n-omega", type=int, default=400, help="number of log-spaced frequencies")
-    parser.add_argument("--depth", type=float, default=math.inf, help="water depth [m] (inf)")
-    parser.add_argument("--rho", type=float, default=998.2, help="water density [kg/m^3]")
-    parser.add_argument("--g", type=float, default=9.81, help="gravity [m/s^2]")
-    parser.add_argument("--method", choices=("direct", "indirect"), default="direct")
+    parser.add_argument("--omega-min", type=float, default=None,
+                        help="lowest frequency [rad/s] (0.1)")
+    parser.add_argument("--omega-max", type=float, default=None,
+                        help="highest frequency [rad/s] (40)")
+    parser.add_argument("--n-omega", type=int, default=None,
+                        help="number of log-spaced frequencies (400)")
+    parser.add_argument("--depth", type=float, default=None, help="water depth [m] (inf)")
+    parser.add_argument("--rho", type=float, default=None, help="water density [kg/m^3] (998.2)")
+    parser.add_argument("--g", type=float, default=None, help="gravity [m/s^2] (9.81)")
+    parser.add_argument("--method", choices=("direct", "indirect"), default=None,
+                        help="boundary integral formulation (direct)")
     parser.add_argument("--out", default="coeffs.nc", help="output NetCDF file")
     parser.add_argument("--cache-dir", default=None, help="cache folder")
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
@@ -64,21 +82,41 @@ def read_body(spec: str):
     return body_from_dict(data)
 
 
-def run(args: argparse.Namespace) -> int:
+def problem(args: argparse.Namespace) -> dict:
+    """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` from the options: a case's
+    (:func:`hybridwsi.cases.bem_arguments`) or the body/frequency options (paper defaults)."""
     from hybridwsi.bodies import FloatingSphere
+    from hybridwsi.cases import bem_arguments, load_case
     from hybridwsi.errors import InputError
+
+    if args.case is not None:
+        clash = [f"--{k.replace('_', '-')}" for k in PROBLEM_OPTIONS
+                 if getattr(args, k) is not None]
+        if clash:
+            raise InputError(f"--case takes the body and BEM set-up from the case file; do not "
+                             f"combine it with {', '.join(clash)}")
+        return bem_arguments(load_case(args.case), "bem_quick" if args.quick else "bem")
+    if args.quick:
+        raise InputError("--quick needs --case")
+    opt = {k: SPHERE_DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)
+           for k in SPHERE_DEFAULTS}
+    if not (0 < opt["omega_min"] < opt["omega_max"]) or opt["n_omega"] < 2:
+        raise InputError("need 0 < --omega-min < --omega-max and --n-omega >= 2")
+    body = (read_body(args.body) if args.body is not None
+            else FloatingSphere(radius=opt["radius"], mass=opt["mass"], rho=opt["rho"],
+                                g=opt["g"]))
+    return {"body": body,
+            "omega": np.geomspace(opt["omega_min"], opt["omega_max"], opt["n_omega"]),
+            "water_depth": opt["depth"], "n_panels": args.panels, "panel_size": args.panel_size,
+            "dofs": args.dofs, "method": opt["method"]}
+
+
+def run(args: argparse.Namespace) -> int:
     from hybridwsi.history import to_netcdf
     from hybridwsi.hydro import bem
 
-    if not (0 < args.omega_min < args.omega_max) or args.n_omega < 2:
-        raise InputError("need 0 < --omega-min < --omega-max and --n-omega >= 2")
-    body = (read_body(args.body) if args.body is not None
-            else FloatingSphere(radius=args.radius, mass=args.mass, rho=args.rho, g=args.g))
-    omega = np.geomspace(args.omega_min, args.omega_max, args.n_omega)
     start = time.perf_counter()
-    ds = bem.compute(body, omega, water_depth=args.depth, n_panels=args.panels,
-                     panel_size=args.panel_size, dofs=args.dofs, method=args.method,
-                     cache_dir=args.cache_dir, use_cache=not args.no_cache,
+    ds = bem.compute(**problem(args), cache_dir=args.cache_dir, use_cache=not args.no_cache,
                      progress=not args.quiet, n_jobs=args.jobs)
     wall = time.perf_counter() - start
     to_netcdf(ds, args.out)
