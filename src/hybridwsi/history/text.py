@@ -23,55 +23,12 @@ from hybridwsi.errors import InputError
 from hybridwsi.files import NETCDF_MAGIC, atomic_write
 from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
-
-#: quantity -> accepted unit spellings (lower case) -> factor to SI
-UNIT_FACTORS: dict[str, dict[str, float]] = {
-    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
-    "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
-    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s**2": 1.0, "m/s²": 1.0, "mm/s^2": 1e-3,
-                     "mm/s2": 1e-3},
-    "force": {"n": 1.0, "kn": 1e3},
-    "angle": {"rad": 1.0, "deg": np.pi / 180},
-    "angular_velocity": {"rad/s": 1.0, "deg/s": np.pi / 180},
-    "angular_acceleration": {"rad/s^2": 1.0, "rad/s2": 1.0, "deg/s^2": np.pi / 180,
-                             "deg/s2": np.pi / 180},
-    "moment": {"nm": 1.0, "n m": 1.0, "n.m": 1.0, "n*m": 1.0, "knm": 1e3, "kn m": 1e3,
-               "kn.m": 1e3, "kn*m": 1e3},
-}
-
-
-def quantity_of(role: str, dof: str = "Heave") -> str:
-    """Physical quantity of a TimeHistory role (``time``, ``z``, ``zdot``, ``zddot``, ``force``)
-    on ``dof`` (rotations take angles and moments, :func:`hybridwsi.dofs.is_rotation`)."""
-    rot = _dofs.is_rotation(dof)
-    return {
-        "time": "time",
-        "z": "angle" if rot else "length",
-        "zdot": "angular_velocity" if rot else "velocity",
-        "zddot": "angular_acceleration" if rot else "acceleration",
-        "force": "moment" if rot else "force",
-    }[role]
-
+from hybridwsi.history.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
 
 def split_header(header: str) -> tuple[str, str | None]:
     """``"time [s]"`` -> ``("time", "s")``; also ``"z (mm)"``; no unit -> ``(header, None)``."""
     m = re.match(r"^\s*(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$", header)
     return (m.group(1), m.group(2)) if m else (header.strip(), None)
-
-
-def unit_factor(unit: str | None, quantity: str, column: str) -> float:
-    """Factor converting ``unit`` to SI for ``quantity``; no unit means SI already."""
-    if unit is None or unit == "":
-        return 1.0
-    table = UNIT_FACTORS[quantity]
-    key = unit.strip().lower()
-    if key not in table:
-        raise InputError(
-            f"column '{column}' has unit '{unit}', not a {quantity.replace('_', ' ')} unit "
-            f"hybridwsi knows (accepted: {', '.join(table)})"
-        )
-    return table[key]
 
 
 class TextTable:
@@ -408,7 +365,7 @@ def _meta_mass(table: TextTable) -> float | np.ndarray | None:
 
 
 def _is_force_unit(unit: str | None, dof: str) -> bool:
-    return unit is None or unit.strip().lower() in UNIT_FACTORS[quantity_of("force", dof)]
+    return unit is None or normalise_unit(unit) in UNIT_FACTORS[quantity_of("force", dof)]
 
 
 def _force_columns(
