@@ -200,6 +200,7 @@ def lazy_tables(monkeypatch):
     """Every corpus file (a few hundred bytes) read through the lazy path (header from the
     head, columns by pandas), as a multi-megabyte file would be."""
     monkeypatch.setattr(TextTable, "HEAD_BYTES", 120)
+    return monkeypatch
 
 
 @pytest.mark.parametrize("name, message", [
@@ -229,6 +230,7 @@ def test_lazy_reader_reads_only_the_named_columns(tmp_path, lazy_tables):
     lines = [",".join(cols)] + [",".join(str(v[i]) for v in cols.values()) for i in range(n)]
     p = tmp_path / "wide.csv"
     p.write_text("\n".join(lines) + "\n")
+    lazy_tables.setattr(TextTable, "HEAD_BYTES", 4096)  # the header is 1.4 kB long
     with pytest.warns(UserWarning, match=f"{width + 1} of {width + 4} columns ignored"):
         ds = h.read_csv(p, forces=["F_tot"])
     assert set(h.force_names(ds)) == {"F_tot"}
@@ -250,3 +252,19 @@ def test_lazy_and_eager_readers_agree(tmp_path, monkeypatch):
     xr.testing.assert_identical(lazy, eager)
     xr.testing.assert_allclose(lazy[["z", "F_tot", "mass"]], ds[["z", "F_tot", "mass"]],
                                rtol=0, atol=0)
+
+
+def test_lazy_reader_with_trailing_separators(tmp_path, lazy_tables):
+    """DualSPHysics-style rows ``a;b;c;``: read by the fast path; data in the unnamed trailing
+    column is still refused with the string parser's message."""
+    rows = "".join(f"{0.01 * k:.2f};{0.001 * k};{7.0 * k};\n" for k in range(40))
+    good = tmp_path / "good.csv"
+    good.write_text("time [s];z [m];F_tot [N];\n" + rows)
+    table = TextTable(good, lazy=True)
+    assert table.load(table.columns) and table._cells is None
+    np.testing.assert_allclose(h.read_csv(good)["F_tot"].values[:, 0], 7.0 * np.arange(40))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time [s];z [m];F_tot [N];\n" + rows.replace("0.05;0.005;35.0;", "0.05;0.005;35.0;9"))
+    assert not TextTable(bad, lazy=True).load(["time [s]"])
+    with pytest.raises(InputError, match="column 4 has data but no header name"):
+        h.read_csv(bad)

@@ -46,7 +46,7 @@ class TextTable:
         The separator used (``","``, ``";"``, ``"\\t"`` or ``"whitespace"``).
 
     With ``lazy=True`` only the comments and the header are read at construction; the columns
-    a caller needs are then parsed by :meth:`load` with pandas' C parser (only those columns,
+    a caller needs are then parsed by :meth:`load` with NumPy's C reader (only those columns,
     as floats), and the whole file is split into string cells (:attr:`cells`,
     :attr:`line_numbers`) only when that fast path cannot be used or an error message needs
     line numbers: every check and message is the same as in the eager mode.
@@ -158,7 +158,7 @@ class TextTable:
 
     # ---------------------------------------------------------------- fast numeric parse
     def load(self, columns: Sequence[str]) -> bool:
-        """Parse ``columns`` as floats with pandas' C parser; True when that worked.
+        """Parse ``columns`` as floats with NumPy's C reader; True when that worked.
 
         The fast path is taken only when it cannot hide a problem the string parse reports:
         every value of the columns finite, no field beyond the header's width and nothing in
@@ -170,29 +170,25 @@ class TextTable:
         want = [c for c in dict.fromkeys(columns) if c not in self._values]
         if not want:
             return True
-        import pandas as pd
-
         width = len(self._header)
-        index = {c: self._keep[k] for k, c in enumerate(self.columns)}
         unnamed = [j for j in range(width) if j not in self._keep]
-        use = sorted({index[c] for c in want} | set(unnamed) | {width})  # width: a sentinel
-        sep = r"\s+" if self.sep == "whitespace" else self.sep
-        try:
-            frame = pd.read_csv(
-                self.path, sep=sep, header=None, names=[f"c{j}" for j in range(width + 1)],
-                usecols=use, skiprows=self._header_idx + 1, comment="#", dtype=np.float64,
-                engine="c", encoding="latin-1", skip_blank_lines=True, na_filter=True,
-            )
-        except (ValueError, pd.errors.ParserError, OSError):
+        if unnamed not in ([], [width - 1]):
+            return False  # empty header cells other than a trailing one: the string parse
+        if not _fields_fit(self.path, self._header_idx, self.sep, width, bool(unnamed)):
+            return False  # a comment, a row longer than the header, data without a name
+        index = {c: self._keep[k] for k, c in enumerate(self.columns)}
+        use = [index[c] for c in want]
+        try:  # numpy's C reader: correctly rounded floats (to_csv round trip), fast
+            data = np.loadtxt(self.path, delimiter=None if self.sep == "whitespace" else self.sep,
+                              skiprows=self._header_idx + 1, usecols=use, dtype=np.float64,
+                              encoding="latin-1", ndmin=2, comments=None)
+        except (ValueError, OSError):
             return False
-        extra = [f"c{j}" for j in (*unnamed, width)]
-        if frame[extra].notna().to_numpy().any():
+        values = {c: data[:, k] for k, c in enumerate(want)}
+        if not np.isfinite(data).all():
             return False
-        values = {c: frame[f"c{index[c]}"].to_numpy() for c in want}
-        if not all(np.isfinite(v).all() for v in values.values()):
-            return False
+        self._n_rows = data.shape[0]
         self._values.update(values)
-        self._n_rows = len(frame)
         return True
 
     @property
@@ -299,6 +295,52 @@ def detect_separator(header_line: str) -> str:
         if sep in header_line:
             return sep
     return "whitespace"
+
+
+def _fields_fit(path: Path, header_idx: int, sep: str, width: int,
+                trailing_unnamed: bool = False) -> bool:
+    """Whether the data lines can be read column by column without hiding an error.
+
+    False when a line after the header holds a ``#`` comment, has more fields than the header
+    (``width``) or, with ``trailing_unnamed`` (a header ending in a separator, as DualSPHysics
+    writes), has data in that unnamed last column: what a reader of some columns only would
+    silently accept. Counted on the raw bytes with NumPy (about 1 s per GB).
+    """
+    buf = np.fromfile(path, dtype=np.uint8)
+    newline = np.flatnonzero(buf == 10)
+    if newline.size <= header_idx:
+        return False
+    buf = buf[newline[header_idx] + 1:]
+    if (buf == ord("#")).any():
+        return False
+    blank = np.frombuffer(b" \t\r\n\v\f", dtype=np.uint8)
+    if sep == "whitespace":
+        space = np.isin(buf, blank)
+        marks = np.flatnonzero(~space[1:] & space[:-1]) + 1  # a field starts after a blank
+        if buf.size and not space[0]:
+            marks = np.concatenate([[0], marks])
+        extra = 0  # fields = starts of fields
+    else:
+        marks = np.flatnonzero(buf == ord(sep))
+        extra = 1  # fields = separators + 1
+    ends = np.append(np.flatnonzero(buf == 10), buf.size)
+    fields = np.diff(np.searchsorted(marks, ends), prepend=0) + extra
+    if fields.max(initial=0) > width:
+        return False
+    if trailing_unnamed:  # a full line must end in the separator (blanks aside)
+        starts = np.concatenate([[0], ends[:-1] + 1])
+        last = ends - 1
+        for _ in range(16):
+            step = (last >= starts) & np.isin(buf[np.clip(last, 0, None)], blank)
+            if not step.any():
+                break
+            last = last - step
+        if step.any():
+            return False
+        full = (fields == width) & (last >= starts)
+        if (buf[last[full]] != ord(sep)).any():
+            return False
+    return True
 
 
 def _read_head(path: Path, n_bytes: int) -> list[str] | None:
