@@ -1,9 +1,10 @@
 """CSV reader at scale (issue 16 item 6): our ``read_csv`` beside ``pandas.read_csv``.
 
-1. A 2.35 M-row CSV (time, z, zdot, zddot, F_tot; ~200 MB) read by
-   :func:`hybridwsi.history.read_csv` and by ``pandas.read_csv`` on the same file in the same
-   process (target: ours within 2x of pandas; pandas is given the same exact-float parsing
-   we use, ``float_precision="round_trip"``, and is also timed with its default parser).
+1. A 2.35 M-row CSV (time, z, zdot, zddot, F_tot; ~220 MB) read by
+   :func:`hybridwsi.history.read_csv` (a validated TimeHistory, floats correctly rounded) and
+   by ``pandas.read_csv`` on the same file in the same process, best of two runs each
+   (target: ours within 2x of pandas' default parser, which is not correctly rounded; pandas
+   with ``float_precision="round_trip"`` is shown too).
 2. A 10 000-column CSV with the force column named (target: seconds).
 
 The files are generated in a temporary folder and removed. Run::
@@ -68,14 +69,17 @@ def main() -> None:
         size = long_csv.stat().st_size / 1e6
         print(f"long CSV: {args.rows} rows, {size:.0f} MB")
         _, t_pd_rt = timed(lambda: pd.read_csv(long_csv, engine="c", float_precision="round_trip"))
-        _, t_pd = timed(lambda: pd.read_csv(long_csv, engine="c"))
-        ds, t_ours = timed(lambda: read_csv(long_csv, forces=["F_tot"]))
+        t_pd, t_ours = np.inf, np.inf
+        for _ in range(2):  # interleaved, best of two: the machine may be shared
+            t_pd = min(t_pd, timed(lambda: pd.read_csv(long_csv, engine="c"))[1])
+            ds, t = timed(lambda: read_csv(long_csv, forces=["F_tot"]))
+            t_ours = min(t_ours, t)
         assert ds.sizes["time"] == args.rows
         print(f"  pandas.read_csv (default float parser):  {t_pd:7.2f} s")
         print(f"  pandas.read_csv (round_trip floats):     {t_pd_rt:7.2f} s")
         print(f"  hybridwsi read_csv (validated history):  {t_ours:7.2f} s")
-        print(f"  ratio ours / pandas round_trip: {t_ours / t_pd_rt:.2f}  "
-              f"(/ pandas default: {t_ours / t_pd:.2f}; target <= 2)")
+        print(f"  ratio ours / pandas default: {t_ours / t_pd:.2f} (target <= 2); "
+              f"ours / pandas round_trip: {t_ours / t_pd_rt:.2f}")
         long_csv.unlink()
 
         wide_csv = Path(tmp) / "wide.csv"

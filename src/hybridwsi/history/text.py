@@ -13,6 +13,7 @@ import os
 import re
 import warnings
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,7 @@ from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
 from hybridwsi.history.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
 
+@lru_cache(maxsize=65536)
 def split_header(header: str) -> tuple[str, str | None]:
     """``"time [s]"`` -> ``("time", "s")``; also ``"z (mm)"``; no unit -> ``(header, None)``."""
     m = re.match(r"^\s*(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$", header)
@@ -147,8 +149,9 @@ class TextTable:
                     f"{self.path.name}: line {ln} has {len(row)} fields but the header has "
                     f"{len(keep)} columns (mismatched lengths)"
                 )
+        named = set(keep)
         for j in range(width):
-            if j not in keep and any(len(r) > j and r[j] != "" for r in rows):
+            if j not in named and any(len(r) > j and r[j] != "" for r in rows):
                 raise InputError(f"{self.path.name}: column {j + 1} has data but no header name")
         cells: dict[str, list[str | None]] = {c: [] for c in self.columns}
         for row in rows:
@@ -171,17 +174,16 @@ class TextTable:
         if not want:
             return True
         width = len(self._header)
-        unnamed = [j for j in range(width) if j not in self._keep]
+        named = set(self._keep)
+        unnamed = [j for j in range(width) if j not in named]
         if unnamed not in ([], [width - 1]):
             return False  # empty header cells other than a trailing one: the string parse
         if not _fields_fit(self.path, self._header_idx, self.sep, width, bool(unnamed)):
             return False  # a comment, a row longer than the header, data without a name
         index = {c: self._keep[k] for k, c in enumerate(self.columns)}
         use = [index[c] for c in want]
-        try:  # numpy's C reader: correctly rounded floats (to_csv round trip), fast
-            data = np.loadtxt(self.path, delimiter=None if self.sep == "whitespace" else self.sep,
-                              skiprows=self._header_idx + 1, usecols=use, dtype=np.float64,
-                              encoding="latin-1", ndmin=2, comments=None)
+        try:
+            data = _read_columns(self.path, self.sep, self._header_idx + 1, use, width)
         except (ValueError, OSError):
             return False
         values = {c: data[:, k] for k, c in enumerate(want)}
@@ -295,6 +297,24 @@ def detect_separator(header_line: str) -> str:
         if sep in header_line:
             return sep
     return "whitespace"
+
+
+def _read_columns(path: Path, sep: str, skip: int, use: list[int], width: int) -> np.ndarray:
+    """Columns ``use`` of a table as correctly rounded floats (exact ``to_csv`` round trip).
+
+    NumPy's C reader when most columns are wanted (the fastest exact parser here); pandas' C
+    tokenizer with round-trip conversion when few of many are (it converts only those).
+    """
+    delimiter = None if sep == "whitespace" else sep
+    if 4 * len(use) >= width:
+        return np.loadtxt(path, delimiter=delimiter, skiprows=skip, usecols=use,
+                          dtype=np.float64, encoding="latin-1", ndmin=2, comments=None)
+    import pandas as pd
+
+    frame = pd.read_csv(path, sep=r"\s+" if delimiter is None else delimiter, header=None,
+                        names=range(width), usecols=use, skiprows=skip, dtype=np.float64,
+                        engine="c", encoding="latin-1", float_precision="round_trip")
+    return frame[use].to_numpy()
 
 
 def _fields_fit(path: Path, header_idx: int, sep: str, width: int,
