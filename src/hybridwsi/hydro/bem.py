@@ -327,8 +327,9 @@ def compute(
     """
     if int(chunk_size) < 1:
         raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
+    the_plan = plan(body, omega, **options)  # checks the body first
     warn_if_sinks(body)
-    return _execute(plan(body, omega, **options), cache_dir=cache_dir, progress=progress,
+    return _execute(the_plan, cache_dir=cache_dir, progress=progress,
                     use_cache=use_cache, chunk_size=int(chunk_size), n_jobs=_n_jobs(n_jobs))
 
 
