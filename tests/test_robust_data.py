@@ -268,3 +268,9 @@ def test_lazy_reader_with_trailing_separators(tmp_path, lazy_tables):
     assert not TextTable(bad, lazy=True).load(["time [s]"])
     with pytest.raises(InputError, match="column 4 has data but no header name"):
         h.read_csv(bad)
+
+
+def test_derivative_estimation_refuses_overflowing_motion():
+    ds = _decay().drop_vars(["zdot", "zddot"])
+    with pytest.raises(InputError, match="squares overflow"):
+        h.estimate_derivatives(ds.assign(z=ds["z"] * 1e302))

@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history.model import is_uniform, time_step, units_attrs, validate
+from hybridwsi.history.model import check_regressors, is_uniform, time_step, units_attrs, validate
 from hybridwsi.history.units import to_si
 
 # --------------------------------------------------------------------------------------------
@@ -141,6 +141,7 @@ def estimate_derivatives(
     dt = time_step(ds)
     t = np.asarray(ds["time"].values, dtype=float)
     z = np.asarray(ds["z"].values, dtype=float)
+    check_regressors({"z": z})  # the spectra below square z: refuse what would overflow
     out = ds.copy()
     for name, deriv in targets:
         cols, notes = [], []
