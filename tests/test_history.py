@@ -301,7 +301,7 @@ BAD_CASES = {
     "too_few_samples.csv": "5 data rows; at least 8",
     "mismatched_lengths.csv": "line 10 has fewer fields",
     "extra_field.csv": "line 4 has 4 fields",
-    "unknown_unit.csv": "unit 'inch'",
+    "unknown_unit.csv": "unit 'furlong'",
     "unknown_time_unit.csv": "unit 'fortnights'",
     "empty.csv": "is empty",
     "comments_only.csv": "no header",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
@@ -147,3 +148,92 @@ def test_sph_history_without_force_is_a_clear_error(tmp_path, capsys):
                  "--sph-history", str(bad), "--out", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "F_tot" in err[0]
+
+
+# ------------------------------------------------------------------ bad input and interruption
+def _floatinginfo(path, duration: float, dt: float = 0.01, mass: float = M):
+    """A DualSPHysics FloatingInfo CSV of a two-frequency heave motion whose fluid force obeys
+    Newton (fluidforcelin.z = m z̈ + m g): the reader's F_tot = m z̈ then gives α = m exactly."""
+    import numpy as np
+
+    t = np.arange(0.0, duration + dt / 2, dt)
+    w1, w2 = 2 * math.pi / 0.75, 2 * math.pi / 0.4
+    z = 0.01 * np.sin(w1 * t) + 0.003 * np.sin(w2 * t)
+    v = 0.01 * w1 * np.cos(w1 * t) + 0.003 * w2 * np.cos(w2 * t)
+    a = -0.01 * w1**2 * np.sin(w1 * t) - 0.003 * w2**2 * np.sin(w2 * t)
+    rows = ["time [s];fvel.z [m/s];center.z [m];heave [m];face.z [m/s^2];fluidforcelin.z [N];"]
+    rows += [f"{ti:.6f};{vi:.10g};{0.72 + zi:.10g};{zi:.10g};{ai:.10g};{mass * (ai + G):.10g};"
+             for ti, zi, vi, ai in zip(t, z, v, a)]
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _digests(folder):
+    import hashlib
+
+    return {p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_short_floatinginfo_is_refused_before_any_bem_run(tmp_path, capsys, monkeypatch):
+    """The shipped test file is a valid FloatingInfo record of 0.8 s, shorter than one wave
+    period: one error line, raised before BEM (which is made to fail here), nothing written."""
+    from hybridwsi.report import reproduce as rep
+
+    def no_bem(*args, **kwargs):
+        raise AssertionError("BEM ran before the inputs were checked")
+
+    monkeypatch.setattr(rep, "_bem_coefficients", no_bem)
+    short = Path(__file__).parent / "data" / "dsph_floatinginfo.csv"
+    out = tmp_path / "r"
+    assert main(["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid",
+                 "--sph-history", str(short), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error:") and "wave periods" in err[0], err
+    assert not out.exists() and not list(tmp_path.glob(".r.*"))
+
+
+def test_killed_run_leaves_the_previous_results_intact(tmp_path, monkeypatch):
+    """Killed after Table 1 (a later step raises): the old folder is untouched, so table1.md and
+    report.md still name the same SPH source; a complete re-run then replaces the whole set."""
+    from hybridwsi.report import reproduce as rep
+
+    out = tmp_path / "res"
+    first = _floatinginfo(tmp_path / "first_run.csv", duration=2.0)
+    args = ["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid", "--out", str(out)]
+    assert main([*args, "--sph-history", str(first)]) == 0
+    before = _digests(out)
+    second = _floatinginfo(tmp_path / "second_run.csv", duration=2.5)
+
+    def killed(*a, **k):
+        assert (tmp_path / ".res.partial" / "table1.md").is_file()  # Table 1 of the new run
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as mp:
+        mp.setattr(rep, "figure2", killed)
+        with pytest.raises(KeyboardInterrupt):
+            rep.run(out, quick=True, progress=False, decay=False, hybrid=False,
+                    sph_path=second)
+    assert _digests(out) == before
+    for name in ("table1.md", "report.md"):
+        text = (out / name).read_text()
+        assert "first_run.csv" in text and "second_run.csv" not in text
+    assert not (tmp_path / ".res.partial").exists()
+
+    # a valid FloatingInfo file gives a valid report: Newton in case 1 (F_tot = m z̈ → α = m)
+    assert main([*args, "--sph-history", str(second)]) == 0
+    for name in ("table1.md", "report.md"):
+        text = (out / name).read_text()
+        assert "second_run.csv" in text and "first_run.csv" not in text
+    assert json.loads((out / "table1.json").read_text())["SPH"]["1"]["alpha"] == pytest.approx(
+        M, rel=1e-6)
+    assert not list(tmp_path.glob(".res.*"))
+
+
+def test_out_folder_with_foreign_files_is_refused(tmp_path, capsys):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "thesis.tex").write_text("keep me")
+    assert main(["reproduce", "--quick", "--quiet", "--out", str(out)]) == 2
+    assert "not reproduce results" in capsys.readouterr().err
+    assert (out / "thesis.tex").read_text() == "keep me"

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 pytest.importorskip("distributed")
 pytest.importorskip("zarr")
@@ -81,7 +82,17 @@ def test_sweep_resumes_after_kill(tmp_path, coeff_file):
 
     with pytest.raises(InputError, match="resume"):
         run_sweep(case_grid(HS, TP, SEEDS), out, _config(coeff_file), resume=False, progress=False)
+    # resuming with other settings (the issue: --ramp 5 after a kill) is refused in one line,
+    # before any case runs
+    changed = SweepConfig(duration=DURATION, dt=DT, coeffs=str(coeff_file), ramp=5.0)
+    with pytest.raises(InputError, match=r"settings differ \(ramp 0.5 -> 5.0\)") as err:
+        run_sweep(case_grid(HS, TP, SEEDS), out, changed, progress=False)
+    assert "\n" not in str(err.value)
+    assert finished_cases(out) == done_before
+    # a kill during consolidation leaves a partial store folder: the next run removes it
+    (out / ".sweep.killed" / "sweep.zarr").mkdir(parents=True)
     store = run_sweep(case_grid(HS, TP, SEEDS), out, _config(coeff_file), progress=False)
+    assert not list(out.glob(".sweep.*"))
 
     # finished parts were skipped, not recomputed
     assert {c: (out / "parts" / f"{c}.nc").stat().st_mtime_ns for c in done_before} == stamps
@@ -91,6 +102,12 @@ def test_sweep_resumes_after_kill(tmp_path, coeff_file):
     assert sorted(ds["case"].values.tolist()) == sorted(c["case_id"] for c in case_grid(HS, TP, SEEDS))
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["status"] == "complete" and manifest["n_cases"] == 20
+    assert manifest["settings"]["ramp"] == 0.5 and len(manifest["settings_hash"]) == 64
+
+    # the resumed store holds exactly what an uninterrupted sweep writes
+    ref = open_sweep(run_sweep(case_grid(HS, TP, SEEDS), tmp_path / "ref", _config(coeff_file),
+                               progress=False))
+    xr.testing.assert_identical(ds.load(), ref.load())
 
     # a case in the store equals an independent direct Cummins run of the same sea
     case = case_grid(HS, TP, SEEDS)[7]
@@ -107,3 +124,24 @@ def test_bad_config_raises():
         SweepConfig(duration=1.0, dt=2.0).check()
     with pytest.raises(InputError, match="not found"):
         SweepConfig(coeffs="/nonexistent/c.nc").check()
+
+
+def test_resume_without_a_settings_manifest_is_refused(tmp_path, coeff_file):
+    out = tmp_path / "old"
+    (out / "parts").mkdir(parents=True)
+    to_netcdf(synthetic_hydro.coefficients(np.linspace(0.1, 1.0, 3)), out / "parts" / "x.nc")
+    with pytest.raises(InputError, match="no readable manifest"):
+        run_sweep(case_grid([0.03], [0.7], 1), out, _config(coeff_file), progress=False)
+
+
+def test_settings_hash_follows_the_coefficient_file_content(tmp_path, coeff_file):
+    from hybridwsi.sweep import settings_hash
+
+    copy = tmp_path / "c.nc"
+    copy.write_bytes(coeff_file.read_bytes())
+    cfg = SweepConfig(duration=DURATION, dt=DT, coeffs=str(copy), ramp=0.5)
+    before = settings_hash(cfg)
+    assert settings_hash(SweepConfig(duration=DURATION, dt=DT, coeffs=str(copy), ramp=0.5)) == before
+    assert settings_hash(SweepConfig(duration=DURATION, dt=DT, coeffs=str(copy), ramp=0.6)) != before
+    to_netcdf(synthetic_hydro.coefficients(np.linspace(0.1, 30.0, 50)), copy)  # replaced in place
+    assert settings_hash(cfg) != before

@@ -6,12 +6,19 @@ atomically, so a killed sweep resumes by skipping the cases whose part exists. W
 case is done the parts are consolidated into one chunked Zarr store ``sweep.zarr`` with a
 ``case`` dimension (one chunk per case) plus ``manifest.json`` (inputs, version, case table).
 
+The manifest records, from the start, a hash of the settings every case shares
+(:func:`settings_hash`: the :class:`SweepConfig`, the content of the coefficient file and the
+runner); resuming with other settings is refused, so a store never mixes cases of two set-ups.
+The store is built in a temporary ``.sweep.*`` folder and renamed into place; such folders
+left by a run killed while consolidating are removed when the next run starts.
+
 Runners are plain top-level functions ``runner(case: dict, config: dict) -> TimeHistory`` so
 that they pickle to workers; :func:`cummins_case` is the default.
 """
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import os
@@ -26,12 +33,14 @@ import xarray as xr
 
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError, SolverError
-from hybridwsi.history import atomic_write, read_netcdf, to_netcdf
+from hybridwsi.history import atomic_write, check_compatible, read_netcdf, to_netcdf
 
 Runner = Callable[[dict, dict], xr.Dataset]
 PARTS = "parts"
 STORE = "sweep.zarr"
 MANIFEST = "manifest.json"
+#: prefix of the temporary folders a store is built in
+PARTIAL_PREFIX = ".sweep."
 
 
 @dataclass
@@ -148,6 +157,67 @@ def _client(scheduler: str | None, n_workers: int):
     return Client(cluster), cluster
 
 
+def _file_digest(path: str | os.PathLike) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def settings(config: SweepConfig, runner: Runner | None = None) -> dict:
+    """What every case of a sweep shares, as plain values: the configuration, the SHA-256 of
+    the coefficient file's content (a file replaced in place changes the set-up) and the
+    runner's qualified name. The case list is not part of it (a grid may be extended)."""
+    runner = cummins_case if runner is None else runner
+    cfg = asdict(config)
+    if config.coeffs:  # the same file from another working directory is the same set-up
+        cfg["coeffs"] = str(Path(config.coeffs).resolve())
+    cfg["coeffs_sha256"] = _file_digest(config.coeffs) if config.coeffs else None
+    cfg["runner"] = f"{getattr(runner, '__module__', '?')}.{getattr(runner, '__qualname__', runner)}"
+    return cfg
+
+
+def _digest(current: dict) -> str:
+    return hashlib.sha256(json.dumps(current, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def settings_hash(config: SweepConfig, runner: Runner | None = None) -> str:
+    """SHA-256 of :func:`settings` (stored in the manifest, compared on resume)."""
+    return _digest(settings(config, runner))
+
+
+def check_resume(out: str | os.PathLike, current: dict) -> None:
+    """Refuse to resume a sweep in ``out`` whose manifest records other settings.
+
+    ``current`` is :func:`settings` of the run about to start. Raises :class:`InputError` (one
+    line naming the settings that differ) when ``out`` holds finished parts and its manifest
+    is missing, unreadable, older than settings hashes, or records different settings.
+    """
+    out = Path(out)
+    try:
+        meta = json.loads((out / MANIFEST).read_text())
+        stored = meta["settings"]
+        stored_hash = meta["settings_hash"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise InputError(f"{out} holds finished cases but no readable manifest with their "
+                         "settings: cannot resume safely; choose a new --out") from None
+    if stored_hash != _digest(current):
+        diff = [k for k in sorted(set(stored) | set(current)) if stored.get(k) != current.get(k)]
+        shown = ", ".join(f"{k} {stored.get(k)!r} -> {current.get(k)!r}" for k in diff[:4])
+        raise InputError(f"cannot resume the sweep in {out}: its settings differ ({shown or 'hash'}"
+                         "); use the same settings or a new --out")
+
+
+def clean_partials(out: str | os.PathLike) -> int:
+    """Remove ``.sweep.*`` folders a killed consolidation left in ``out``; return how many."""
+    out = Path(out)
+    stale = [p for p in out.glob(PARTIAL_PREFIX + "*") if p.is_dir()] if out.is_dir() else []
+    for p in stale:
+        shutil.rmtree(p, ignore_errors=True)
+    return len(stale)
+
+
 def finished_cases(out: str | os.PathLike) -> set[str]:
     """Case ids whose part file exists in ``out/parts``."""
     d = Path(out) / PARTS
@@ -183,7 +253,8 @@ def run_sweep(
         ``n_workers`` processes with one thread each.
     resume : bool
         Skip cases already written; with False an existing non-empty ``parts/`` is an error
-        (delete it or pass ``resume=True``).
+        (delete it or pass ``resume=True``). Resuming with settings other than those in the
+        manifest (:func:`settings_hash`) is an error too.
 
     Returns
     -------
@@ -202,11 +273,15 @@ def run_sweep(
     if done and not resume:
         raise InputError(f"{out / PARTS} already holds {len(done)} finished case(s); "
                          "pass --resume to continue that sweep or choose a new --out")
+    current = settings(config, runner)
+    if done:
+        check_resume(out, current)
     todo = [c for c in cases if c["case_id"] not in done]
     (out / PARTS).mkdir(parents=True, exist_ok=True)
     for stale in (out / PARTS).glob(".*.tmp"):  # half-written parts of a killed run
         stale.unlink(missing_ok=True)
-    _write_manifest(out, cases, config, status="running")
+    clean_partials(out)
+    _write_manifest(out, cases, current, status="running")
     cfg = asdict(config)
     failures: list[str] = []
     if todo:
@@ -247,12 +322,14 @@ def run_sweep(
     if not consolidate_store:
         return out / PARTS
     path = consolidate(out, ids)
-    _write_manifest(out, cases, config, status="complete")
+    _write_manifest(out, cases, current, status="complete")
     return path
 
 
-def _write_manifest(out: Path, cases: Sequence[dict], config: SweepConfig, status: str) -> None:
-    meta = {"hybridwsi_version": version(), "status": status, "config": asdict(config),
+def _write_manifest(out: Path, cases: Sequence[dict], current: dict, status: str) -> None:
+    config = {k: v for k, v in current.items() if k not in ("coeffs_sha256", "runner")}
+    meta = {"hybridwsi_version": version(), "status": status, "config": config,
+            "settings": current, "settings_hash": _digest(current),
             "n_cases": len(cases), "cases": list(cases)}
     text = json.dumps(meta, indent=1, default=str)
     atomic_write(out / MANIFEST, lambda tmp: Path(tmp).write_text(text))
@@ -265,6 +342,7 @@ def consolidate(out: str | os.PathLike, case_ids: Sequence[str] | None = None) -
     folder and renamed into place, so a crash never leaves a half store.
     """
     out = Path(out)
+    clean_partials(out)
     ids = sorted(finished_cases(out)) if case_ids is None else list(case_ids)
     missing = [c for c in ids if not _part_path(out, c).is_file()]
     if missing:
@@ -274,6 +352,7 @@ def consolidate(out: str | os.PathLike, case_ids: Sequence[str] | None = None) -
         ds = read_netcdf(_part_path(out, cid))
         cases.append(json.loads(ds.attrs.get("case", json.dumps({"case_id": cid}))))
         parts.append(ds.drop_attrs() if hasattr(ds, "drop_attrs") else ds)
+    check_compatible(parts)  # one dt, one body: a store is one set-up
     try:
         big = xr.concat(parts, dim="case", data_vars="all", coords="minimal",
                         compat="override", join="exact")
@@ -287,11 +366,11 @@ def consolidate(out: str | os.PathLike, case_ids: Sequence[str] | None = None) -
                  "inputs": json.dumps({"cases": cases}, default=str)}
     big = big.chunk({"case": 1})
     target = out / STORE
-    tmp = Path(tempfile.mkdtemp(prefix=".sweep.", dir=out))
+    tmp = Path(tempfile.mkdtemp(prefix=PARTIAL_PREFIX, dir=out))
     try:
         big.to_zarr(tmp / STORE, mode="w", consolidated=True, zarr_format=2)
-        if target.exists():
-            shutil.rmtree(target)
+        if target.exists():  # move the old store aside (renames only: never no store + no new)
+            os.replace(target, tmp / "previous")
         os.replace(tmp / STORE, target)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

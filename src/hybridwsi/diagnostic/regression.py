@@ -48,7 +48,7 @@ from hybridwsi.forces import (
     black_box_force,
     parse_known,
 )
-from hybridwsi.history import validate
+from hybridwsi.history import check_regressors, validate
 
 #: condition number of the column-normalised regressors above which a singular direction counts
 #: as weak when deciding which combinations are determined (no longer part of the verdict:
@@ -668,6 +668,8 @@ def regress(
     n, n_dof = z.shape
     accuracy = _force_accuracy(force_accuracy, n_dof)
     f_bb = black_box_force(hist, force, comps)
+    # refuse here what would otherwise overflow in the fit (garbage α, β, γ or a NaN lag)
+    check_regressors({"z": z, "zdot": zd, "zddot": zdd}, {f"{force} - known": f_bb})
     fixed = fix_alpha is not None
     terms = ("beta", "gamma") if fixed else _TERMS
     alpha_fixed = as_matrix(fix_alpha, n_dof, "fix_alpha") if fixed else None
@@ -886,6 +888,7 @@ def frequency_domain_split(
         raise InputError("frequency_domain_split handles 1 DOF; coupled DOF need one run per DOF")
     (z,) = kinematics(hist, ("z",))
     f_bb = black_box_force(hist, force, as_components(known))
+    check_regressors({"z": z}, {f"{force} - known": f_bb})
     t = np.asarray(hist["time"].values, dtype=float)
     dt = float((t[-1] - t[0]) / (t.size - 1))
     if omegas is None:

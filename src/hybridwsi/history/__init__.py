@@ -5,9 +5,12 @@ force components, optional ``mass``; units per DOF). The package is split along 
 
 - :mod:`~hybridwsi.history.model`: the data model — :func:`make_history`, :func:`validate`,
   :func:`force_names`, :func:`mass_matrix`, :func:`set_mass`, :func:`time_step`,
-  :func:`is_uniform`;
+  :func:`is_uniform`, and the checks :func:`check_mass`, :func:`check_compatible` (histories
+  that may be pooled) and :func:`check_regressors` (data a fit can use);
 - :mod:`~hybridwsi.files`: atomic writers (:func:`atomic_write`, :func:`write_json`,
   :func:`write_text`) and the NetCDF round trip (:func:`to_netcdf`, :func:`read_netcdf`);
+- :mod:`~hybridwsi.history.units`: the one unit table (:data:`UNIT_FACTORS`,
+  :func:`unit_factor`) and :func:`to_si` (a whole history in SI, unknown units refused);
 - :mod:`~hybridwsi.history.text`: text tables with units in their headers
   (:class:`TextTable`, :func:`read_csv`, :func:`to_csv`);
 - :mod:`~hybridwsi.history.signal`: derivative estimation, resampling and the crossing
@@ -34,6 +37,9 @@ from hybridwsi.history.model import (
     DEFAULT_DOF,
     KINEMATICS,
     UNIFORM_RTOL,
+    check_compatible,
+    check_mass,
+    check_regressors,
     force_names,
     is_uniform,
     make_history,
@@ -54,14 +60,20 @@ from hybridwsi.history.signal import (
     savgol_window,
 )
 from hybridwsi.history.text import (
-    UNIT_FACTORS,
     TextTable,
     detect_separator,
-    quantity_of,
     read_csv,
     read_text_file,
     split_header,
     to_csv,
+)
+from hybridwsi.history.units import (
+    SI_UNITS,
+    UNIT_FACTORS,
+    check_si,
+    normalise_unit,
+    quantity_of,
+    to_si,
     unit_factor,
 )
 
@@ -71,9 +83,14 @@ __all__ = [
     "KINEMATICS",
     "NETCDF_MAGIC",
     "UNIFORM_RTOL",
+    "SI_UNITS",
     "UNIT_FACTORS",
     "TextTable",
     "atomic_write",
+    "check_compatible",
+    "check_mass",
+    "check_regressors",
+    "check_si",
     "crossing_periods",
     "crossings",
     "detect_separator",
@@ -84,6 +101,7 @@ __all__ = [
     "make_history",
     "mass_matrix",
     "mean_crossing_period",
+    "normalise_unit",
     "quantity_of",
     "read_csv",
     "read_netcdf",
@@ -95,6 +113,7 @@ __all__ = [
     "time_step",
     "to_csv",
     "to_netcdf",
+    "to_si",
     "units_attrs",
     "units_per_dof",
     "unit_factor",

@@ -24,6 +24,7 @@ label, e.g. ``"m, rad"`` for Surge and Pitch) and ``units_per_dof`` (a JSON list
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -33,6 +34,7 @@ import xarray as xr
 from hybridwsi import dofs as _dofs
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError
+from hybridwsi.history.units import check_si
 from hybridwsi.hydro.coefficients import pair_units_attr
 
 KINEMATICS = ("z", "zdot", "zddot")
@@ -91,9 +93,43 @@ def _as_2d(name: str, values: Any, n_time: int, n_dof: int) -> np.ndarray:
 
 
 def _mass_matrix(mass: Any, nd: int) -> np.ndarray:
-    """Scalar or (nd, nd) mass as a matrix (a scalar on every diagonal entry)."""
-    m = np.atleast_2d(np.asarray(mass, dtype=float))
-    return np.eye(nd) * m[0, 0] if m.shape == (1, 1) else m
+    """Scalar or (nd, nd) mass as a checked matrix (a scalar on every diagonal entry).
+
+    Raises :class:`InputError` unless the mass is finite, positive on the diagonal and the
+    matrix symmetric positive definite: a zero, negative or NaN mass has no physical meaning
+    and would silently flip or blow up every acceleration it divides.
+    """
+    try:
+        m = np.atleast_2d(np.asarray(mass, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError(f"mass must be a number or a ({nd}, {nd}) matrix, got {mass!r}") from None
+    m = np.eye(nd) * m[0, 0] if m.shape == (1, 1) else m
+    check_mass(m, nd)
+    return m
+
+
+def check_mass(m: np.ndarray, nd: int) -> None:
+    """Refuse a rigid-body mass matrix [kg, kg m, kg m²] that is not physical.
+
+    Parameters
+    ----------
+    m : ndarray
+        The matrix.
+    nd : int
+        Number of DOFs it must match.
+    """
+    if m.shape != (nd, nd):
+        raise InputError(f"mass must be a scalar or a ({nd}, {nd}) matrix, got shape {m.shape}")
+    shown = f"{m[0, 0]:g}" if nd == 1 else np.array2string(m, precision=4, separator=", ")
+    shown = " ".join(shown.split())
+    if not np.all(np.isfinite(m)):
+        raise InputError(f"mass must be finite, got {shown}")
+    if np.any(np.diag(m) <= 0):
+        raise InputError(f"mass must be positive, got {shown} (a body needs a positive mass)")
+    if not np.allclose(m, m.T, rtol=1e-9, atol=1e-12 * float(np.abs(m).max())):
+        raise InputError(f"mass matrix must be symmetric, got {shown}")
+    if nd > 1 and np.linalg.eigvalsh(m).min() <= 0:
+        raise InputError(f"mass matrix must be positive definite, got {shown}")
 
 
 def make_history(
@@ -158,8 +194,6 @@ def make_history(
         data_vars[name] = (("time", "dof"), _as_2d(name, values, n, nd), dict(force_attrs))
     if mass is not None:
         m = _mass_matrix(mass, nd)
-        if m.shape != (nd, nd):
-            raise InputError(f"mass must be a scalar or a ({nd}, {nd}) matrix, got {m.shape}")
         data_vars["mass"] = (("dof", "dof_j"), m, _mass_attrs(dof))
     coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "dof": dof}
     if "mass" in data_vars:
@@ -191,13 +225,7 @@ def mass_matrix(ds: xr.Dataset) -> np.ndarray | None:
 
 def set_mass(ds: xr.Dataset, mass: float | np.ndarray) -> xr.Dataset:
     """Return ``ds`` with its rigid-body mass set (scalar [kg] or (n_dof, n_dof) matrix)."""
-    nd = ds.sizes["dof"]
-    try:
-        m = _mass_matrix(mass, nd)
-    except (TypeError, ValueError):
-        raise InputError(f"mass must be a number, got {mass!r}") from None
-    if m.shape != (nd, nd) or not np.all(np.isfinite(m)) or np.any(np.diag(m) <= 0):
-        raise InputError(f"mass must be a positive scalar or a ({nd}, {nd}) matrix, got {mass!r}")
+    m = _mass_matrix(mass, ds.sizes["dof"])
     dof = [str(d) for d in ds["dof"].values]
     out = ds.drop_vars([v for v in ("mass",) if v in ds])
     out = out.assign_coords(dof_j=dof)
@@ -217,7 +245,9 @@ def validate(
     Checks: ``time`` present, finite, strictly increasing (no duplicates), uniform within
     ``UNIFORM_RTOL`` (unless ``require_uniform=False``), at least ``min_samples`` samples;
     ``z`` present (unless ``require_z=False``, for acceleration-only imports); every kinematic
-    and force variable finite (no NaN/inf) and shaped ``(time, dof)``.
+    and force variable finite (no NaN/inf) and shaped ``(time, dof)``; units SI
+    (:func:`hybridwsi.history.units.check_si`: a file read without conversion is refused, not
+    used at the wrong scale); ``mass``, when present, finite and positive definite.
     """
     if not isinstance(ds, xr.Dataset):
         raise InputError(f"expected an xarray.Dataset TimeHistory, got {type(ds).__name__}")
@@ -261,7 +291,73 @@ def validate(
                 f"'{name}' has {int(bad.sum())} NaN/inf value(s), first at row {i} "
                 f"(t = {t[i]:.6g} s)"
             )
+    if "mass" in ds:
+        check_mass(np.atleast_2d(np.asarray(ds["mass"].values, dtype=float)), ds.sizes["dof"])
+    check_si(ds)
     return ds
+
+
+def check_compatible(histories: Sequence[xr.Dataset], *, rtol: float = UNIFORM_RTOL) -> None:
+    """Refuse histories that cannot be pooled (training sets, sweeps): raise :class:`InputError`
+    unless they share the DOFs, the time step [s] (within ``rtol``) and the mass matrix.
+
+    Mixing records of different sampling or of bodies of different mass fits one model to
+    different physics (a network trained on them predicts neither); histories without a mass
+    are compatible with any.
+    """
+    hists = list(histories)
+    if not hists:
+        raise InputError("no histories given")
+    ref = hists[0]
+    ref_dof = [str(d) for d in ref["dof"].values]
+    ref_dt = time_step(ref)
+    ref_m = mass_matrix(ref)
+    for k, h in enumerate(hists[1:], start=1):
+        dof = [str(d) for d in h["dof"].values]
+        if dof != ref_dof:
+            raise InputError(f"history {k} has DOFs {dof}, history 0 has {ref_dof}")
+        dt = time_step(h)
+        if abs(dt - ref_dt) > rtol * ref_dt:
+            raise InputError(f"history {k} has time step {dt:.6g} s, history 0 has "
+                             f"{ref_dt:.6g} s: resample them to one step first")
+        m = mass_matrix(h)
+        if m is not None and ref_m is not None and not np.allclose(m, ref_m, rtol=1e-9):
+            raise InputError(f"history {k} has mass {m.ravel().tolist()}, history 0 has "
+                             f"{ref_m.ravel().tolist()} (different bodies cannot be pooled)")
+
+
+def check_regressors(motion: Mapping[str, np.ndarray],
+                     forces: Mapping[str, np.ndarray] | None = None) -> None:
+    """Refuse data a least-squares fit on the motion cannot use (raise :class:`InputError`).
+
+    Parameters
+    ----------
+    motion : mapping of str to ndarray, each (n, n_dof)
+        The regressors (``z`` [m or rad], ``zdot``, ``zddot``).
+    forces : mapping of str to ndarray, optional
+        The regressed forces [N or N m].
+
+    Every value must be finite and small enough that a sum of ``n`` squares stays finite
+    (``|x| < sqrt(max float / n)``, about 1e150 for 1e5 samples: beyond it the normal
+    equations overflow and the fit returns garbage with NaN); the motion must not be constant
+    (zero variance in every column: nothing to regress on).
+    """
+    limit = None
+    for name, values in {**motion, **(forces or {})}.items():
+        v = np.asarray(values, dtype=float)
+        if limit is None:
+            limit = math.sqrt(np.finfo(float).max / max(v.shape[0], 1))
+        if not np.all(np.isfinite(v)):
+            raise InputError(f"'{name}' has NaN/inf values: nothing can be fitted to them")
+        peak = float(np.abs(v).max()) if v.size else 0.0
+        if peak > limit:
+            raise InputError(
+                f"'{name}' reaches {peak:.3g}: its squares overflow a float over "
+                f"{v.shape[0]} samples; check its units (largest usable value {limit:.3g})"
+            )
+    spread = [np.ptp(np.asarray(v, dtype=float), axis=0) for v in motion.values()]
+    if spread and all(np.all(s == 0) for s in spread):
+        raise InputError("the motion is constant: nothing to regress (z, zdot, zddot never change)")
 
 
 def _steps_uniform(steps: np.ndarray) -> bool:

@@ -17,7 +17,8 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history.model import is_uniform, time_step, units_attrs, validate
+from hybridwsi.history.model import check_regressors, is_uniform, time_step, units_attrs, validate
+from hybridwsi.history.units import to_si
 
 # --------------------------------------------------------------------------------------------
 # Derivative estimation
@@ -140,6 +141,7 @@ def estimate_derivatives(
     dt = time_step(ds)
     t = np.asarray(ds["time"].values, dtype=float)
     z = np.asarray(ds["z"].values, dtype=float)
+    check_regressors({"z": z})  # the spectra below square z: refuse what would overflow
     out = ds.copy()
     for name, deriv in targets:
         cols, notes = [], []
@@ -240,11 +242,15 @@ def finalize_import(
     require_uniform: bool = True,
     require_z: bool = True,
 ) -> xr.Dataset:
-    """Validate a freshly imported history; resample it first when asked and irregular.
+    """Convert a freshly imported history to SI and validate it; resample it first when asked
+    and irregular.
 
-    Used by every ``read_*`` function so that irregular sampling is handled the same way:
-    rejected with a clear message unless ``resample_to_uniform`` (or ``require_uniform=False``).
+    Used by every ``read_*`` function so that units (:func:`hybridwsi.history.units.to_si`:
+    NetCDF ``units`` attributes honoured, unknown ones refused) and irregular sampling are
+    handled the same way: irregular sampling is rejected with a clear message unless
+    ``resample_to_uniform`` (or ``require_uniform=False``).
     """
+    ds = to_si(ds)
     validate(ds, require_uniform=False, require_z=require_z)
     if resample_to_uniform and not is_uniform(ds):
         ds = resample(ds)

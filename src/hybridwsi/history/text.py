@@ -11,7 +11,9 @@ from __future__ import annotations
 import json
 import os
 import re
+import warnings
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -23,55 +25,13 @@ from hybridwsi.errors import InputError
 from hybridwsi.files import NETCDF_MAGIC, atomic_write
 from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
+from hybridwsi.history.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
 
-#: quantity -> accepted unit spellings (lower case) -> factor to SI
-UNIT_FACTORS: dict[str, dict[str, float]] = {
-    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
-    "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
-    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s**2": 1.0, "m/s²": 1.0, "mm/s^2": 1e-3,
-                     "mm/s2": 1e-3},
-    "force": {"n": 1.0, "kn": 1e3},
-    "angle": {"rad": 1.0, "deg": np.pi / 180},
-    "angular_velocity": {"rad/s": 1.0, "deg/s": np.pi / 180},
-    "angular_acceleration": {"rad/s^2": 1.0, "rad/s2": 1.0, "deg/s^2": np.pi / 180,
-                             "deg/s2": np.pi / 180},
-    "moment": {"nm": 1.0, "n m": 1.0, "n.m": 1.0, "n*m": 1.0, "knm": 1e3, "kn m": 1e3,
-               "kn.m": 1e3, "kn*m": 1e3},
-}
-
-
-def quantity_of(role: str, dof: str = "Heave") -> str:
-    """Physical quantity of a TimeHistory role (``time``, ``z``, ``zdot``, ``zddot``, ``force``)
-    on ``dof`` (rotations take angles and moments, :func:`hybridwsi.dofs.is_rotation`)."""
-    rot = _dofs.is_rotation(dof)
-    return {
-        "time": "time",
-        "z": "angle" if rot else "length",
-        "zdot": "angular_velocity" if rot else "velocity",
-        "zddot": "angular_acceleration" if rot else "acceleration",
-        "force": "moment" if rot else "force",
-    }[role]
-
-
+@lru_cache(maxsize=65536)
 def split_header(header: str) -> tuple[str, str | None]:
     """``"time [s]"`` -> ``("time", "s")``; also ``"z (mm)"``; no unit -> ``(header, None)``."""
     m = re.match(r"^\s*(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$", header)
     return (m.group(1), m.group(2)) if m else (header.strip(), None)
-
-
-def unit_factor(unit: str | None, quantity: str, column: str) -> float:
-    """Factor converting ``unit`` to SI for ``quantity``; no unit means SI already."""
-    if unit is None or unit == "":
-        return 1.0
-    table = UNIT_FACTORS[quantity]
-    key = unit.strip().lower()
-    if key not in table:
-        raise InputError(
-            f"column '{column}' has unit '{unit}', not a {quantity.replace('_', ' ')} unit "
-            f"hybridwsi knows (accepted: {', '.join(table)})"
-        )
-    return table[key]
 
 
 class TextTable:
@@ -86,15 +46,30 @@ class TextTable:
         ``key: value`` pairs from ``# key: value`` comment lines before the header.
     sep : str
         The separator used (``","``, ``";"``, ``"\\t"`` or ``"whitespace"``).
+
+    With ``lazy=True`` only the comments and the header are read at construction; the columns
+    a caller needs are then parsed by :meth:`load` with NumPy's C reader (only those columns,
+    as floats), and the whole file is split into string cells (:attr:`cells`,
+    :attr:`line_numbers`) only when that fast path cannot be used or an error message needs
+    line numbers: every check and message is the same as in the eager mode.
     """
 
-    def __init__(self, path: str | os.PathLike, sep: str | None = None) -> None:
+    #: bytes read to find the header in lazy mode (more comment lines: eager reading)
+    HEAD_BYTES = 1 << 16
+
+    def __init__(self, path: str | os.PathLike, sep: str | None = None, *,
+                 lazy: bool = False) -> None:
         self.path = Path(path)
-        text = read_text_file(self.path)
-        self._lines = text.splitlines()
+        self._given_sep = sep
+        self._cells: dict[str, list[str | None]] | None = None
+        self._line_numbers: np.ndarray | None = None
+        self._values: dict[str, np.ndarray] = {}
+        self._lines: list[str] | None = None
+        head = _read_head(self.path, self.HEAD_BYTES) if lazy else None
+        lines = head if head is not None else read_text_file(self.path).splitlines()
         self.meta: dict[str, str] = {}
         header_idx = None
-        for i, line in enumerate(self._lines):
+        for i, line in enumerate(lines):
             s = line.strip()
             if not s:
                 continue
@@ -105,11 +80,51 @@ class TextTable:
                 continue
             header_idx = i
             break
+        if header_idx is None and head is not None:  # header beyond the head: read it all
+            self.__init__(path, sep)  # type: ignore[misc]
+            return
         if header_idx is None:
             raise InputError(f"{self.path.name}: no header line and no data (only comments)")
-        self.sep = sep or detect_separator(self._lines[header_idx])
+        self.sep = sep or detect_separator(lines[header_idx])
         self._header_idx = header_idx
-        self.columns, self.cells, self.line_numbers = self._parse(header_idx)
+        self._header = self._split(lines[header_idx])
+        self._keep = [j for j, h in enumerate(self._header) if h != ""]
+        self.columns = [self._header[j] for j in self._keep]
+        if len(set(self.columns)) != len(self.columns):
+            dup = next(c for c in self.columns if self.columns.count(c) > 1)
+            raise InputError(f"{self.path.name}: column name '{dup}' appears twice in the header")
+        if head is None:
+            self._lines = lines
+            self._parse_all()
+
+    # ---------------------------------------------------------------- full (string) parse
+    def _parse_all(self) -> None:
+        if self._lines is None:
+            self._lines = read_text_file(self.path).splitlines()
+        self._cells, self._line_numbers = self._parse(self._header_idx)
+        self._lines = None  # the cells hold what is needed
+
+    @property
+    def cells(self) -> dict[str, list[str | None]]:
+        """Column -> its cells as written (None where a row is too short)."""
+        if self._cells is None:
+            self._parse_all()
+        return self._cells  # type: ignore[return-value]
+
+    @cells.setter
+    def cells(self, value: dict[str, list[str | None]]) -> None:
+        self._cells = value
+
+    @property
+    def line_numbers(self) -> np.ndarray:
+        """File line number (1-based) of each data row."""
+        if self._line_numbers is None:
+            self._parse_all()
+        return self._line_numbers  # type: ignore[return-value]
+
+    @line_numbers.setter
+    def line_numbers(self, value: np.ndarray) -> None:
+        self._line_numbers = value
 
     def _split(self, line: str) -> list[str]:
         line = line.split("#", 1)[0]
@@ -118,7 +133,7 @@ class TextTable:
         return [c.strip() for c in line.split(self.sep)]
 
     def _parse(self, header_idx: int):
-        header = self._split(self._lines[header_idx])
+        assert self._lines is not None
         rows, linenos = [], []
         for i in range(header_idx + 1, len(self._lines)):
             s = self._lines[i].strip()
@@ -127,29 +142,61 @@ class TextTable:
             rows.append(self._split(self._lines[i]))
             linenos.append(i + 1)
         # trailing separators (DualSPHysics writes "a;b;") give empty header cells: drop them
-        keep = [j for j, h in enumerate(header) if h != ""]
-        width = len(header)
+        keep, width = self._keep, len(self._header)
         for row, ln in zip(rows, linenos):
             if any(c != "" for c in row[width:]):
                 raise InputError(
                     f"{self.path.name}: line {ln} has {len(row)} fields but the header has "
                     f"{len(keep)} columns (mismatched lengths)"
                 )
+        named = set(keep)
         for j in range(width):
-            if j not in keep and any(len(r) > j and r[j] != "" for r in rows):
+            if j not in named and any(len(r) > j and r[j] != "" for r in rows):
                 raise InputError(f"{self.path.name}: column {j + 1} has data but no header name")
-        columns = [header[j] for j in keep]
-        if len(set(columns)) != len(columns):
-            dup = next(c for c in columns if columns.count(c) > 1)
-            raise InputError(f"{self.path.name}: column name '{dup}' appears twice in the header")
-        cells: dict[str, list[str | None]] = {c: [] for c in columns}
+        cells: dict[str, list[str | None]] = {c: [] for c in self.columns}
         for row in rows:
-            for j, c in zip(keep, columns):
+            for j, c in zip(keep, self.columns):
                 cells[c].append(row[j] if j < len(row) else None)  # None: row too short
-        return columns, cells, np.asarray(linenos, dtype=int)
+        return cells, np.asarray(linenos, dtype=int)
+
+    # ---------------------------------------------------------------- fast numeric parse
+    def load(self, columns: Sequence[str]) -> bool:
+        """Parse ``columns`` as floats with NumPy's C reader; True when that worked.
+
+        The fast path is taken only when it cannot hide a problem the string parse reports:
+        every value of the columns finite, no field beyond the header's width and nothing in
+        an unnamed column. Otherwise (or when the table was read eagerly) nothing is loaded
+        and :meth:`numeric` parses the strings, with line numbers in its messages.
+        """
+        if self._cells is not None:
+            return False
+        want = [c for c in dict.fromkeys(columns) if c not in self._values]
+        if not want:
+            return True
+        width = len(self._header)
+        named = set(self._keep)
+        unnamed = [j for j in range(width) if j not in named]
+        if unnamed not in ([], [width - 1]):
+            return False  # empty header cells other than a trailing one: the string parse
+        if not _fields_fit(self.path, self._header_idx, self.sep, width, bool(unnamed)):
+            return False  # a comment, a row longer than the header, data without a name
+        index = {c: self._keep[k] for k, c in enumerate(self.columns)}
+        use = [index[c] for c in want]
+        try:
+            data = _read_columns(self.path, self.sep, self._header_idx + 1, use, width)
+        except (ValueError, OSError):
+            return False
+        values = {c: data[:, k] for k, c in enumerate(want)}
+        if not np.isfinite(data).all():
+            return False
+        self._n_rows = data.shape[0]
+        self._values.update(values)
+        return True
 
     @property
     def n_rows(self) -> int:
+        if self._line_numbers is None and self._values:
+            return self._n_rows
         return int(self.line_numbers.size)
 
     def find(self, name: str) -> str | None:
@@ -174,11 +221,13 @@ class TextTable:
 
     def numeric(self, column: str, quantity: str | None = None, scale: float = 1.0) -> np.ndarray:
         """Column as floats in SI (unit from the header), or a one-line InputError."""
-        raw = self.cells[column]
         try:
             factor = 1.0 if quantity is None else unit_factor(split_header(column)[1], quantity, column)
         except InputError as exc:
             raise InputError(f"{self.path.name}: {exc}") from None
+        if column in self._values:  # parsed and checked finite by load()
+            return self._values[column] * (factor * scale)
+        raw = self.cells[column]
         try:  # fast path: every cell a finite number
             out = np.asarray(raw, dtype=float)
             if np.all(np.isfinite(out)):
@@ -213,6 +262,8 @@ class TextTable:
 
     def is_numeric(self, column: str) -> bool:
         """Whether at least one cell of the column parses as a number."""
+        if column in self._values:
+            return True
         for cell in self.cells[column]:
             try:
                 float(cell)  # type: ignore[arg-type]
@@ -246,6 +297,89 @@ def detect_separator(header_line: str) -> str:
         if sep in header_line:
             return sep
     return "whitespace"
+
+
+def _read_columns(path: Path, sep: str, skip: int, use: list[int], width: int) -> np.ndarray:
+    """Columns ``use`` of a table as correctly rounded floats (exact ``to_csv`` round trip).
+
+    NumPy's C reader when most columns are wanted (the fastest exact parser here); pandas' C
+    tokenizer with round-trip conversion when few of many are (it converts only those).
+    """
+    delimiter = None if sep == "whitespace" else sep
+    if 4 * len(use) >= width:
+        return np.loadtxt(path, delimiter=delimiter, skiprows=skip, usecols=use,
+                          dtype=np.float64, encoding="latin-1", ndmin=2, comments=None)
+    import pandas as pd
+
+    frame = pd.read_csv(path, sep=r"\s+" if delimiter is None else delimiter, header=None,
+                        names=range(width), usecols=use, skiprows=skip, dtype=np.float64,
+                        engine="c", encoding="latin-1", float_precision="round_trip")
+    return frame[use].to_numpy()
+
+
+def _fields_fit(path: Path, header_idx: int, sep: str, width: int,
+                trailing_unnamed: bool = False) -> bool:
+    """Whether the data lines can be read column by column without hiding an error.
+
+    False when a line after the header holds a ``#`` comment, has more fields than the header
+    (``width``) or, with ``trailing_unnamed`` (a header ending in a separator, as DualSPHysics
+    writes), has data in that unnamed last column: what a reader of some columns only would
+    silently accept. Counted on the raw bytes with NumPy (about 1 s per GB).
+    """
+    buf = np.fromfile(path, dtype=np.uint8)
+    newline = np.flatnonzero(buf == 10)
+    if newline.size <= header_idx:
+        return False
+    buf = buf[newline[header_idx] + 1:]
+    if (buf == ord("#")).any():
+        return False
+    blank = np.frombuffer(b" \t\r\n\v\f", dtype=np.uint8)
+    if sep == "whitespace":
+        space = np.isin(buf, blank)
+        marks = np.flatnonzero(~space[1:] & space[:-1]) + 1  # a field starts after a blank
+        if buf.size and not space[0]:
+            marks = np.concatenate([[0], marks])
+        extra = 0  # fields = starts of fields
+    else:
+        marks = np.flatnonzero(buf == ord(sep))
+        extra = 1  # fields = separators + 1
+    ends = np.append(np.flatnonzero(buf == 10), buf.size)
+    fields = np.diff(np.searchsorted(marks, ends), prepend=0) + extra
+    if fields.max(initial=0) > width:
+        return False
+    if trailing_unnamed:  # a full line must end in the separator (blanks aside)
+        starts = np.concatenate([[0], ends[:-1] + 1])
+        last = ends - 1
+        for _ in range(16):
+            step = (last >= starts) & np.isin(buf[np.clip(last, 0, None)], blank)
+            if not step.any():
+                break
+            last = last - step
+        if step.any():
+            return False
+        full = (fields == width) & (last >= starts)
+        if (buf[last[full]] != ord(sep)).any():
+            return False
+    return True
+
+
+def _read_head(path: Path, n_bytes: int) -> list[str] | None:
+    """The first complete lines of a text file (at most ``n_bytes``), with the checks of
+    :func:`read_text_file` on them; None when the whole file is that short (read it all)."""
+    if not path.is_file() or path.stat().st_size <= n_bytes:
+        return None
+    try:
+        with open(path, "rb") as f:
+            data = f.read(n_bytes)
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror or exc}") from None
+    if data.startswith(NETCDF_MAGIC) or b"\x00" in data or b"\n" not in data:
+        return None  # let read_text_file say what it is
+    data = data[: data.rindex(b"\n")]
+    try:
+        return data.decode("utf-8-sig").splitlines()
+    except UnicodeDecodeError:
+        return None
 
 
 def read_text_file(path: Path) -> str:
@@ -332,7 +466,7 @@ def read_csv(
     angle rad/deg, force N/kN, moment N m/kN m, ...; an unknown unit raises
     :class:`InputError`.
     """
-    table = TextTable(path, sep)
+    table = TextTable(path, sep, lazy=True)
     dof_names = list(_dofs.check_dofs(dof if dof is not None else table.meta.get("dof", "Heave")))
     cols: dict[str, list[str]] = {"time": [table.require(time, "time column")]}
     for role, given in (("z", z), ("zdot", zdot), ("zddot", zddot)):
@@ -342,11 +476,17 @@ def read_csv(
             found = _dof_columns(table, role, dof_names)
             if found is not None:
                 cols[role] = found
+    used = {c for cs in cols.values() for c in cs}
+    named = _named_force_columns(table, forces, dof_names)
+    # only the columns asked for are parsed (all of them when the forces are not named)
+    table.load(table.columns if named is None else [*used, *(c for cs in named.values() for c in cs)])
     t = table.numeric(cols["time"][0], "time")
     table.check_time(t)
     kin = {r: _read_dofs(table, c, r, dof_names) for r, c in cols.items() if r != "time"}
-    used = {c for cs in cols.values() for c in cs}
-    force_cols, extra_cols = _force_columns(table, forces, used, dof_names)
+    force_cols, extra_cols = (named, {}) if named is not None else _force_columns(
+        table, used, dof_names)
+    ignored = len(table.columns) - len(used | {c for cs in force_cols.values() for c in cs}
+                                       | {c for cs in extra_cols.values() for c in cs})
     force_data = {v: _read_dofs(table, c, "force", dof_names) for v, c in force_cols.items()}
     if mass is None:
         mass = _meta_mass(table)
@@ -354,7 +494,7 @@ def read_csv(
         t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names, mass=mass,
         source=table.meta.get("source", f"csv:{table.path.name}"),
         inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
-                "sep": table.sep},
+                "sep": table.sep, **({"ignored_columns": ignored} if ignored else {})},
         check=False,
     )
     for var, cs in extra_cols.items():
@@ -365,7 +505,11 @@ def read_csv(
         note = table.meta.get(f"estimated.{role}")
         if note and role in ds:
             ds[role].attrs["estimated"] = note
-    return finalize_import(ds, resample_to_uniform=resample, require_z=z is not None)
+    ds = finalize_import(ds, resample_to_uniform=resample, require_z=z is not None)
+    if named is not None and ignored:  # said once the file is read (never before an error)
+        warnings.warn(f"{table.path.name}: {ignored} of {len(table.columns)} columns ignored "
+                      "(not the time, motion or named force columns)", UserWarning, stacklevel=2)
+    return ds
 
 
 def _column_names(stem: str, dofs: Sequence[str]) -> list[str]:
@@ -408,20 +552,27 @@ def _meta_mass(table: TextTable) -> float | np.ndarray | None:
 
 
 def _is_force_unit(unit: str | None, dof: str) -> bool:
-    return unit is None or unit.strip().lower() in UNIT_FACTORS[quantity_of("force", dof)]
+    return unit is None or normalise_unit(unit) in UNIT_FACTORS[quantity_of("force", dof)]
+
+
+def _named_force_columns(
+    table: TextTable, forces: Sequence[str] | Mapping[str, str] | str | None, dofs: Sequence[str],
+) -> dict[str, list[str]] | None:
+    """``{variable: columns}`` of the force columns named by the caller (None: none named)."""
+    if forces is None:
+        return None
+    if isinstance(forces, str):
+        forces = [forces]
+    mapping = dict(forces) if isinstance(forces, Mapping) else {f: f for f in forces}
+    return {_var_name(v): _dof_columns(table, c, dofs, "force column")  # type: ignore[misc]
+            for v, c in mapping.items()}
 
 
 def _force_columns(
-    table: TextTable, forces: Sequence[str] | Mapping[str, str] | str | None, used: set[str],
-    dofs: Sequence[str],
+    table: TextTable, used: set[str], dofs: Sequence[str],
 ) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
-    """``({variable: columns} of forces, {variable: columns} of extra variables)``."""
-    if forces is not None:
-        if isinstance(forces, str):
-            forces = [forces]
-        mapping = dict(forces) if isinstance(forces, Mapping) else {f: f for f in forces}
-        return {_var_name(v): _dof_columns(table, c, dofs, "force column")  # type: ignore[misc]
-                for v, c in mapping.items()}, {}
+    """``({variable: columns} of forces, {variable: columns} of extra variables)`` when the
+    forces are not named: every other numeric column, grouped per DOF."""
     groups: dict[str, dict[str, str]] = {}
     for col in table.columns:
         if col in used or not table.is_numeric(col):

@@ -328,8 +328,35 @@ def compute(
     """
     if int(chunk_size) < 1:
         raise InputError(f"chunk_size must be >= 1, got {chunk_size}")
-    return _execute(plan(body, omega, **options), cache_dir=cache_dir, progress=progress,
+    the_plan = plan(body, omega, **options)  # checks the body first
+    warn_if_sinks(body)
+    return _execute(the_plan, cache_dir=cache_dir, progress=progress,
                     use_cache=use_cache, chunk_size=int(chunk_size), n_jobs=_n_jobs(n_jobs))
+
+
+#: relative excess of weight over buoyancy tolerated before a body is said to sink
+SINK_RTOL = 0.01
+
+
+def warn_if_sinks(body: Body, rtol: float = SINK_RTOL) -> bool:
+    """Warn loudly (:class:`UserWarning`) when the body's weight m g [N] exceeds the buoyancy
+    ρ g V [N] of its displaced volume at rest by more than ``rtol``: it sinks, so coefficients
+    about this draft describe no equilibrium (usually a wrong mass). Returns whether it warned.
+
+    A lighter body is not warned about: a moored floater (a spar, a TLP) carries the
+    difference as mooring pretension.
+    """
+    weight = float(body.mass) * body.g
+    buoyancy = body.rho * body.g * float(body.displaced_volume())
+    if not weight > buoyancy * (1.0 + rtol):
+        return False
+    warnings.warn(
+        f"THE BODY SINKS: {body.name} weighs m g = {weight:.4g} N but displaces only "
+        f"rho g V = {buoyancy:.4g} N at rest (mass {float(body.mass):.4g} kg vs rho V = "
+        f"{buoyancy / body.g:.4g} kg, {100 * (weight / buoyancy - 1):.3g} % too heavy); "
+        "its coefficients describe no equilibrium: check the mass",
+        UserWarning, stacklevel=3)
+    return True
 
 
 def _execute(p: Plan, *, cache_dir, progress: bool, use_cache: bool, chunk_size: int,

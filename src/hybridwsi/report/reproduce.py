@@ -14,11 +14,20 @@ Pipeline (each stage's output is written to ``out/`` so a reader can check every
    codes (``fig1_decay.png``, ``decay_validation.json``/``.md``).
 6. ``report.md`` linking all of it (the prose: :mod:`hybridwsi.report.markdown`; figures:
    :mod:`hybridwsi.report.plots`; Fig. 1 scoring: :mod:`hybridwsi.report.validation`).
+
+Every input (the SPH history file: readable, its variables, its length) is checked before the
+first expensive step. The results are written as one set: built in a sibling folder
+``.<out>.partial`` and swapped into place when complete, so ``out``'s previous content stays
+until the new set is whole and a killed run never leaves a folder mixing two runs (the SPH
+checkpoint of ``--recompute-sph`` is kept in the partial folder so the run resumes).
 """
 
 from __future__ import annotations
 
 import json
+import os
+import re
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,6 +53,17 @@ from hybridwsi.report.markdown import (
 )
 
 SPH_HISTORY = "sph_regular_waves.nc"
+#: the SPH run's resume checkpoint (hybridwsi.sph.run.run_case), kept across killed runs
+SPH_CHECKPOINT = SPH_HISTORY + ".ckpt.npz"
+#: wave periods an SPH history must span in Table 1's regression window (one to see a full
+#: cycle of z, z', z'', a second so that the fit is not the cycle's own end effects)
+MIN_SPH_PERIODS = 2.0
+#: what a results folder holds (an existing --out with anything else is not replaced)
+RESULT_NAMES = re.compile(
+    r"(report\.md|summary\.json|table1(_steady_state)?\.(json|md)|fig[12]_[a-z]+\.(png|nc)"
+    r"|fig2_metrics\.json|decay_validation\.(json|md)|selection\.json|hybrid_demo\.json"
+    r"|histories|\.hybridwsi-results)")
+MARKER = ".hybridwsi-results"
 
 
 def _log(msg: str, progress: bool) -> None:
@@ -79,7 +99,23 @@ class Table1Case:
         keys = ("alpha", "beta", "gamma", "mean_force", "stderr", "ci95", "r2", "condition_number",
                 "singular_values", "identifiable", "identifiable_combinations", "warnings",
                 "dominant_omega")
-        return {"F_bb": self.label, **{k: d[k] for k in keys if k in d}}
+        out = {"F_bb": self.label, **{k: d[k] for k in keys if k in d}}
+        # an undetermined term (exact single-frequency data) has an infinite stderr, which
+        # to_dict writes as None: keep it a number here (the JSON writer still writes null)
+        for k in ("stderr", "condition_number"):
+            if k in out:
+                out[k] = _none_to_inf(out[k])
+        return out
+
+
+def _none_to_inf(value: Any) -> Any:
+    if value is None:
+        return np.inf
+    if isinstance(value, dict):
+        return {k: _none_to_inf(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_none_to_inf(v) for v in value]
+    return value
 
 
 def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dict[str, list]:
@@ -203,36 +239,36 @@ def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
     return outlook_markdown(head, demo)
 
 
-def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None = None,
-                dp: float | None = None, mass: float | None = None, openmp: bool = False,
-                progress: bool = True) -> tuple[xr.Dataset | None, str]:
-    """The SPH history of Table 1's SPH column and a note saying where it came from.
+def sph_source(path: str | Path | None) -> Path | None:
+    """The SPH history file of Table 1: ``path``, else the one shipped in ``hybridwsi/data``,
+    else None (the column is "pending")."""
+    if path is not None:
+        return Path(path)
+    shipped = Path(__file__).resolve().parent.parent / "data" / SPH_HISTORY
+    return shipped if shipped.is_file() else None
 
-    ``recompute``: run ``hybridwsi sph regular3d`` now (resumable: an interrupted run continues
-    from ``out/histories/sph_regular_waves.nc.ckpt.npz``); else ``path``: any history file
-    ``read_history`` understands (NetCDF, CSV, DualSPHysics FloatingInfo with ``mass``); else
-    the history shipped in ``hybridwsi/data``; else none ("pending").
+
+def read_sph_history(src: Path, *, mass: float | None, period: float,
+                     window_start: float) -> tuple[xr.Dataset, str]:
+    """Read and check a user/shipped SPH history and say where it came from.
+
+    Any file ``read_history`` understands (NetCDF, CSV, DualSPHysics FloatingInfo with
+    ``mass`` [kg]); it must hold ``F_tot``, ``z``, ``zdot``, ``zddot`` and span at least
+    ``MIN_SPH_PERIODS`` wave periods ``period`` [s] after ``window_start`` [s] (Table 1's
+    regression window). Raises :class:`InputError` otherwise: called before any BEM run.
     """
-    from hybridwsi.cases import load_case
     from hybridwsi.importers import read_history
 
-    if recompute:
-        from hybridwsi.sph import tank
-        from hybridwsi.sph.run import run_case
-
-        cfg = load_case("paper_sphere")["sph_regular_waves"]  # the shipped run's set-up
-        case = tank.build("regular3d", **{**cfg, "dp": dp or cfg["dp"]})
-        target = out / "histories" / SPH_HISTORY
-        hist = run_case(case, target, resume=True, progress=progress, openmp=openmp)
-        return _needs_force(hist, target), (
-            f"SPH column from a run made now: `hybridwsi sph regular3d --dp {case.dp:g}` "
-            f"({case.n_particles} particles), written to histories/{SPH_HISTORY}.")
-    shipped = Path(__file__).resolve().parent.parent / "data" / SPH_HISTORY
-    src = Path(path) if path is not None else (shipped if shipped.is_file() else None)
-    if src is None:
-        return None, ("SPH column: pending; no SPH history is shipped yet (run with "
-                      "`--recompute-sph` or pass one with `--sph-history FILE`).")
+    if not src.is_file():
+        raise InputError(f"--sph-history: no such file {src}")
     hist = _needs_force(read_history(src, mass=mass), src)
+    t = np.asarray(hist["time"].values, dtype=float)
+    span = t[-1] - max(t[0], window_start)
+    if span < MIN_SPH_PERIODS * period:
+        raise InputError(
+            f"{src}: the SPH history spans {max(span, 0.0):.3g} s after t = {window_start:g} s; "
+            f"Table 1 needs at least {MIN_SPH_PERIODS:g} wave periods ({MIN_SPH_PERIODS * period:.3g} s)"
+        )
     try:
         inputs = json.loads(hist.attrs.get("inputs", "{}"))
     except ValueError:
@@ -244,11 +280,98 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
                   f"{wave_note(hist)}")
 
 
+def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None = None,
+                dp: float | None = None, mass: float | None = None, openmp: bool = False,
+                progress: bool = True) -> tuple[xr.Dataset | None, str]:
+    """The SPH history of Table 1's SPH column and a note saying where it came from.
+
+    ``recompute``: run ``hybridwsi sph regular3d`` now (resumable: an interrupted run continues
+    from ``out/histories/sph_regular_waves.nc.ckpt.npz``); else ``path``: any history file
+    ``read_history`` understands (:func:`read_sph_history`); else the history shipped in
+    ``hybridwsi/data``; else none ("pending").
+    """
+    from hybridwsi.cases import load_case
+
+    case = load_case("paper_sphere")
+    if recompute:
+        from hybridwsi.sph import tank
+        from hybridwsi.sph.run import run_case
+
+        cfg = case["sph_regular_waves"]  # the shipped run's set-up
+        sph_case = tank.build("regular3d", **{**cfg, "dp": dp or cfg["dp"]})
+        target = out / "histories" / SPH_HISTORY
+        hist = run_case(sph_case, target, resume=True, progress=progress, openmp=openmp)
+        return _needs_force(hist, target), (
+            f"SPH column from a run made now: `hybridwsi sph regular3d --dp {sph_case.dp:g}` "
+            f"({sph_case.n_particles} particles), written to histories/{SPH_HISTORY}.")
+    src = sph_source(path)
+    if src is None:
+        return None, ("SPH column: pending; no SPH history is shipped yet (run with "
+                      "`--recompute-sph` or pass one with `--sph-history FILE`).")
+    rw = case["regular_waves"]
+    return read_sph_history(src, mass=mass, period=rw["period"], window_start=rw["window_start"])
+
+
 def _needs_force(hist: xr.Dataset, src: Path) -> xr.Dataset:
     missing = [v for v in ("F_tot", "z", "zdot", "zddot") if v not in hist]
     if missing:
         raise InputError(f"{src}: the SPH history needs {', '.join(missing)} for Table 1")
     return hist
+
+
+def _partial_dir(out: Path) -> Path:
+    return out.parent / f".{out.name}.partial"
+
+
+def check_out_folder(out: Path) -> None:
+    """Refuse an ``--out`` that exists but is not a results folder (a file, or a folder with
+    other content): the new set replaces the folder as a whole."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is not a folder")
+    if out.is_dir() and not (out / MARKER).is_file():
+        other = sorted(p.name for p in out.iterdir() if not RESULT_NAMES.fullmatch(p.name))
+        if other:
+            raise InputError(f"--out {out} holds files that are not reproduce results "
+                             f"({', '.join(other[:3])}{', ...' if len(other) > 3 else ''}); "
+                             "choose a new or empty folder")
+
+
+def _prepare_partial(out: Path) -> Path:
+    """A clean ``.<out>.partial`` folder to build the set in.
+
+    What a killed run left there is removed except the SPH checkpoint (so ``--recompute-sph``
+    resumes); the checkpoint of a completed run in ``out`` is carried over too. A results folder
+    moved aside by a swap that was killed half-way is put back first.
+    """
+    for old in out.parent.glob(f".{out.name}.old.*"):
+        if out.exists():
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(old, out)
+    partial = _partial_dir(out)
+    keep = partial / "histories" / SPH_CHECKPOINT
+    if partial.is_dir():
+        for p in partial.iterdir():
+            if p.name != "histories":
+                shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
+        for p in (partial / "histories").glob("*"):
+            if p != keep:
+                shutil.rmtree(p) if p.is_dir() else p.unlink()
+    (partial / "histories").mkdir(parents=True, exist_ok=True)
+    done = out / "histories" / SPH_CHECKPOINT
+    if done.is_file() and not keep.is_file():
+        shutil.copy2(done, keep)
+    (partial / MARKER).write_text("a hybridwsi reproduce results folder\n")
+    return partial
+
+
+def _swap_into_place(partial: Path, out: Path) -> None:
+    """Replace ``out`` by the completed set in ``partial`` (renames only)."""
+    old = out.parent / f".{out.name}.old.{os.getpid()}"
+    if out.exists():
+        os.replace(out, old)
+    os.replace(partial, out)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def run(out: str | Path = "results", *, quick: bool = False, progress: bool = True,
@@ -258,15 +381,43 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     """Run the whole reproduction and write the results folder. Returns the summary dict.
 
     ``recompute_sph``, ``sph_path``, ``sph_dp`` and ``sph_openmp`` choose the SPH column's
-    history (:func:`sph_history`).
+    history (:func:`sph_history`). Inputs are checked first; the folder is replaced as a whole
+    when the new set is complete (module docstring).
     """
+    from hybridwsi.cases import load_case
+
+    out = Path(out).absolute()
+    check_out_folder(out)
+    case = load_case("paper_sphere")
+    rw = case["regular_waves"]
+    sph_pre = None
+    if not recompute_sph:  # check the SPH history before any expensive step
+        src = sph_source(sph_path)
+        if src is not None:
+            sph_pre = read_sph_history(src, mass=case["body"]["mass"], period=rw["period"],
+                                       window_start=rw["window_start"])
+    partial = _prepare_partial(out)
+    try:
+        summary = _build(partial, case, quick=quick, progress=progress, decay=decay,
+                         hybrid=hybrid, recompute_sph=recompute_sph, sph_pre=sph_pre,
+                         sph_dp=sph_dp, sph_openmp=sph_openmp)
+    except BaseException:  # incl. Ctrl-C: out untouched; only an SPH checkpoint is worth keeping
+        if not (partial / "histories" / SPH_CHECKPOINT).is_file():
+            shutil.rmtree(partial, ignore_errors=True)
+        raise
+    _swap_into_place(partial, out)
+    _log(f"done in {summary['wall_time_s']:.0f} s → {out}/report.md", progress)
+    return summary
+
+
+def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, hybrid: bool,
+           recompute_sph: bool, sph_pre: tuple[xr.Dataset, str] | None, sph_dp: float | None,
+           sph_openmp: bool) -> dict[str, Any]:
+    """Write the whole results set into ``out`` (the partial folder)."""
     from hybridwsi import bodies, cummins, waves
     from hybridwsi.cases import load_case
 
     t0 = time.perf_counter()
-    out = Path(out)
-    (out / "histories").mkdir(parents=True, exist_ok=True)
-    case = load_case("paper_sphere")
     cfg = case["bem_quick" if quick else "bem"]
     b = case["body"]
     body = bodies.FloatingSphere.paper()
@@ -288,8 +439,11 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     partitions = table1_partitions(coeffs, hist)
     acc = case["force_accuracy"]  # per generator (docs/THEORY.md §3b)
     ours = {"BEM": regress_table1(window, partitions, acc["BEM"])}
-    sph, sph_note = sph_history(out, recompute=recompute_sph, path=sph_path, dp=sph_dp,
-                                mass=b["mass"], openmp=sph_openmp, progress=progress)
+    if recompute_sph:
+        sph, sph_note = sph_history(out, recompute=True, dp=sph_dp, mass=b["mass"],
+                                    openmp=sph_openmp, progress=progress)
+    else:
+        sph, sph_note = sph_pre if sph_pre is not None else sph_history(out)
     if sph is not None:
         ours["SPH"] = regress_table1(sph.sel(time=slice(rw["window_start"], None)), partitions,
                                      acc["SPH"])
@@ -355,7 +509,6 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     _write_text(out / "report.md", report_markdown(summary, md, note, sph_note, fig2, decay_md,
                                                    "SPH" in ours, decay)
                 + "\n" + kramer_md + "\n" + outlook_md)
-    _log(f"done in {summary['wall_time_s']:.0f} s → {out}/report.md", progress)
     return summary
 
 
