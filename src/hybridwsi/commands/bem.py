@@ -22,32 +22,57 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from hybridwsi.commands import _options as o
+
     parser.add_argument("--body", default=None,
                         help="body description: a JSON file or JSON text with a 'type' "
                              "(FloatingSphere, AxisymmetricBody, MeshBody, RigidAssembly); "
                              "replaces --radius/--mass/--rho/--g")
-    parser.add_argument("--radius", type=float, default=0.15, help="sphere radius [m]")
-    parser.add_argument("--mass", type=float, default=7.06, help="sphere mass [kg]")
-    parser.add_argument("--panels", type=int, default=None,
+    parser.add_argument("--radius", type=o.positive_float, default=0.15,
+                        help="sphere radius [m] (default 0.15)")
+    o.add_mass(parser, "of the sphere (default 7.06)", default=7.06)
+    parser.add_argument("--panels", type=o.positive_int, default=None, metavar="N",
                         help="approximate hull panel count (sphere default 6400)")
-    parser.add_argument("--panel-size", type=float, default=None,
+    parser.add_argument("--panel-size", type=o.positive_float, default=None, metavar="M",
                         help="hull panel size [m] (instead of --panels)")
-    parser.add_argument("--dofs", default=None,
-                        help="comma-separated DOFs, e.g. Surge,Heave,Pitch (default: the body's)")
-    parser.add_argument("--omega-min", type=float, default=0.1, help="lowest frequency [rad/s]")
-    parser.add_argument("--omega-max", type=float, default=40.0, help="highest frequency [rad/s]")
-    parser.add_argument("--n-omega", type=int, default=400, help="number of log-spaced frequencies")
-    parser.add_argument("--depth", type=float, default=math.inf, help="water depth [m] (inf)")
-    parser.add_argument("--rho", type=float, default=998.2, help="water density [kg/m^3]")
-    parser.add_argument("--g", type=float, default=9.81, help="gravity [m/s^2]")
-    parser.add_argument("--method", choices=("direct", "indirect"), default="direct")
-    parser.add_argument("--out", default="coeffs.nc", help="output NetCDF file")
-    parser.add_argument("--cache-dir", default=None, help="cache folder")
+    o.add_dofs(parser, "the DOFs to solve (default: the body's)")
+    parser.add_argument("--omega-min", type=o.positive_float, default=0.1,
+                        help="lowest frequency [rad/s] (default 0.1)")
+    parser.add_argument("--omega-max", type=o.positive_float, default=40.0,
+                        help="highest frequency [rad/s] (default 40)")
+    parser.add_argument("--n-omega", type=o.positive_int, default=400,
+                        help="number of log-spaced frequencies (default 400)")
+    parser.add_argument("--depth", type=o.positive_float, default=math.inf,
+                        help="water depth [m] (default: infinite)")
+    parser.add_argument("--rho", type=o.positive_float, default=998.2,
+                        help="water density [kg/m^3] (default 998.2)")
+    parser.add_argument("--g", type=o.positive_float, default=9.81,
+                        help="gravity [m/s^2] (default 9.81)")
+    parser.add_argument("--method", choices=("direct", "indirect"), default="direct",
+                        help="boundary-integral formulation of Capytaine (default direct)")
+    o.add_out(parser, "output coefficient NetCDF (default coeffs.nc)", default="coeffs.nc",
+              metavar="COEFFS.nc")
+    parser.add_argument("--cache-dir", default=None, metavar="DIR",
+                        help="cache folder (default ~/.cache/hybridwsi/bem or $HYBRIDWSI_CACHE/bem)")
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument("--jobs", type=int, default=None,
+    o.add_quiet(parser)
+    parser.add_argument("--workers", type=o.positive_int, default=None,
                         help="worker processes (default: $HYBRIDWSI_BEM_JOBS, else all CPUs for "
                              "long sweeps)")
+
+
+#: bytes per panel pair of Capytaine's dense influence matrices (S and K, complex128)
+BYTES_PER_PANEL_PAIR = 2 * 16
+
+
+def check_panels(n_panels: int | None, workers: int | None) -> None:
+    """Refuse a mesh whose dense BEM matrices cannot fit in memory (before meshing)."""
+    from hybridwsi.commands._options import check_allocation
+
+    if n_panels is not None:
+        check_allocation(BYTES_PER_PANEL_PAIR * float(n_panels) ** 2 * (workers or 1),
+                         f"--panels {n_panels} (dense N x N influence matrices)",
+                         "use fewer panels")
 
 
 def read_body(spec: str):
@@ -55,23 +80,38 @@ def read_body(spec: str):
     from hybridwsi.bodies import body_from_dict
     from hybridwsi.errors import InputError
 
+    from hybridwsi.history import read_text_file
+
     path = Path(spec).expanduser()
-    text = path.read_text() if path.is_file() else spec
+    looks_like_json = spec.lstrip().startswith(("{", "["))
+    text = spec if looks_like_json else read_text_file(path)
     try:
         data = json.loads(text)
-    except json.JSONDecodeError:
-        raise InputError(f"--body must be a JSON file or JSON text, got {spec!r}") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"--body: {spec if looks_like_json else path} is not valid JSON "
+                         f"({exc.msg} at line {exc.lineno})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"--body must describe one body as a JSON object, got "
+                         f"{type(data).__name__}")
     return body_from_dict(data)
 
 
 def run(args: argparse.Namespace) -> int:
     from hybridwsi.bodies import FloatingSphere
     from hybridwsi.errors import InputError
+    from hybridwsi.files import check_output_path
     from hybridwsi.history import to_netcdf
     from hybridwsi.hydro import bem
 
-    if not (0 < args.omega_min < args.omega_max) or args.n_omega < 2:
-        raise InputError("need 0 < --omega-min < --omega-max and --n-omega >= 2")
+    if not args.omega_min < args.omega_max or args.n_omega < 2:
+        raise InputError("need --omega-min < --omega-max and --n-omega >= 2")
+    if args.panels is not None and args.panel_size is not None:
+        raise InputError("give --panels or --panel-size, not both")
+    body_file = args.body if args.body and Path(args.body).expanduser().exists() else None
+    check_output_path(args.out, [body_file])
+    if args.cache_dir is not None and not args.no_cache:
+        check_output_path(args.cache_dir, kind="dir")
+    check_panels(args.panels, args.workers)
     body = (read_body(args.body) if args.body is not None
             else FloatingSphere(radius=args.radius, mass=args.mass, rho=args.rho, g=args.g))
     omega = np.geomspace(args.omega_min, args.omega_max, args.n_omega)
@@ -79,10 +119,11 @@ def run(args: argparse.Namespace) -> int:
     ds = bem.compute(body, omega, water_depth=args.depth, n_panels=args.panels,
                      panel_size=args.panel_size, dofs=args.dofs, method=args.method,
                      cache_dir=args.cache_dir, use_cache=not args.no_cache,
-                     progress=not args.quiet, n_jobs=args.jobs)
+                     progress=not args.quiet, n_jobs=args.workers)
     wall = time.perf_counter() - start
     to_netcdf(ds, args.out)
-    _print_summary(ds, wall, args.out)
+    if not args.quiet:
+        _print_summary(ds, wall, args.out)
     return 0
 
 
