@@ -7,7 +7,8 @@ several commands come from :mod:`hybridwsi.commands._options` (one name, one mea
 table is in docs/CLI.md).
 
 Every failure the user can fix is printed as ONE line ``error: ...`` on stderr with exit
-status 2, never a traceback: usage errors of argparse (:class:`Parser`), bad input
+status 2, never a traceback (warnings are printed as ``warning: ...`` lines after a successful
+run only): usage errors of argparse (:class:`Parser`), bad input
 (:class:`hybridwsi.errors.InputError`), solver failures, operating-system errors on the files,
 and a missing optional dependency (the message names the extra to install).
 """
@@ -18,6 +19,7 @@ import argparse
 import importlib
 import importlib.util
 import sys
+import warnings
 from typing import NoReturn
 
 from hybridwsi.commands._options import missing_dependency, one_line
@@ -87,9 +89,17 @@ def build_parser(only: str | None = None) -> Parser:
 
 
 def _run(args: argparse.Namespace) -> int:
-    """Run a parsed command; every user-fixable failure becomes one ``error:`` line."""
+    """Run a parsed command; every user-fixable failure becomes one ``error:`` line.
+
+    Warnings raised while the command runs are printed after it, one ``warning: ...`` line
+    each; when the command fails, only its error line is printed.
+    """
     try:
-        return int(args._run(args) or 0)
+        with warnings.catch_warnings(record=True) as caught:
+            status = int(args._run(args) or 0)
+        for w in caught:  # re-issued, so that callers of main() still see them as warnings
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return status
     except HybridWSIError as exc:
         print_error(str(exc))
     except ModuleNotFoundError as exc:
@@ -120,7 +130,17 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return 0 if cmd is None else EXIT_ERROR
-    return _run(args)
+    saved = warnings.formatwarning
+    warnings.formatwarning = _format_warning
+    try:
+        return _run(args)
+    finally:
+        warnings.formatwarning = saved
+
+
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning printed by the CLI: one ``warning: ...`` line, no source excerpt."""
+    return f"warning: {one_line(str(message))}\n"
 
 
 if __name__ == "__main__":  # python -m hybridwsi.cli

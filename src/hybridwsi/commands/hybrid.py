@@ -64,15 +64,28 @@ PRODUCTS = ("network.pt", "network.json", "report.json")
 MAX_WIDTH = 65536
 
 
+def _open_sweep(path: Path):
+    """:func:`hybridwsi.sweep.open_sweep`, with a corrupt store as one InputError."""
+    from hybridwsi.sweep import open_sweep
+
+    try:
+        return open_sweep(path)
+    except InputError:
+        raise
+    except Exception as exc:  # zarr/xarray raise many types on a damaged or fake store
+        raise InputError(f"cannot read the sweep store {path}: {type(exc).__name__}: "
+                         f"{exc}") from None
+
+
 def _load(data: list[str], dofs: tuple[str, ...] | None):
     from hybridwsi.commands._options import read_dofs, select_dofs
-    from hybridwsi.sweep import STORE, case_history, open_sweep
+    from hybridwsi.sweep import STORE, case_history
 
     hists, manifest = [], None
     for item in data:
         path = Path(item)
         if path.is_dir() and ((path / STORE).exists() or path.suffix == ".zarr"):
-            sw = open_sweep(path)
+            sw = _open_sweep(path)
             hists += [select_dofs(case_history(sw, i), dofs, what=str(path))
                       for i in range(sw.sizes["case"])]
             mf = (path if path.suffix != ".zarr" else path.parent) / "manifest.json"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 HELP = "reproduce the paper (Table 1, Fig. 1, Fig. 2) into a results folder"
@@ -45,8 +46,8 @@ def check_inputs(args: argparse.Namespace) -> None:
 
     out = check_output_path(args.out, [args.sph_history], kind="dir")
     if args.sph_history is not None:
-        src = Path(args.sph_history).expanduser().resolve()
-        if out.resolve() in src.parents:  # the results folder is replaced as a whole
+        src = Path(os.path.realpath(Path(args.sph_history).expanduser()))  # loops do not raise
+        if Path(os.path.realpath(out)) in src.parents:  # the results folder is replaced whole
             raise InputError(f"--sph-history {args.sph_history} lies inside the results folder "
                              f"{args.out}; move it out or choose another --out")
         read_history(args.sph_history)  # a bad file is refused now, not after BEM and Cummins

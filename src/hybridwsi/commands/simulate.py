@@ -129,6 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hybridwsi import cummins, waves
     from hybridwsi.commands._options import check_steps
+    from hybridwsi.errors import InputError
     from hybridwsi.files import check_output_path
     from hybridwsi.history import to_netcdf
 

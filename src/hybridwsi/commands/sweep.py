@@ -47,6 +47,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     o.add_quiet(p)
 
 
+#: what a wave-excited Cummins run reads from the coefficients
+NEEDED = ("added_mass_inf", "hydrostatic_stiffness", "radiation_damping", "excitation_force")
+
+
+def check_coefficients(coeffs, *, mass_given: bool) -> None:
+    """Refuse coefficients that lack what every case needs (before any case starts)."""
+    from hybridwsi.errors import InputError
+    from hybridwsi.hydro import coefficients as cf
+
+    needed = NEEDED if mass_given else (*NEEDED, "mass")
+    missing = [n for n in needed if not cf.has(coeffs, n)]
+    if missing:
+        raise InputError(f"the coefficients have no {', '.join(missing)}; a sweep needs "
+                         f"{', '.join(needed)}")
+    for name in ("added_mass_inf", "hydrostatic_stiffness") + (() if mass_given else ("mass",)):
+        cf.matrix(coeffs, name)  # raises on NaN or a malformed matrix
+
+
 def run(args: argparse.Namespace) -> int:
     from hybridwsi.commands._options import check_steps, require
     from hybridwsi.errors import InputError
@@ -63,7 +81,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--duration ({args.duration} s) must be longer than --dt ({args.dt} s)")
     check_steps(args.duration, args.dt, len(args.dofs))
     if args.coeffs:  # a bad file is refused here, before the Dask cluster starts
-        read_coefficients(args.coeffs, assume_seawater=True)
+        check_coefficients(read_coefficients(args.coeffs, assume_seawater=True),
+                           mass_given=args.mass is not None)
     cases = case_grid(args.hs, args.tp, args.seeds)
     cfg = SweepConfig(duration=args.duration, dt=args.dt, coeffs=args.coeffs, mass=args.mass,
                       nonlinear_hydrostatics=args.nonlinear_hydrostatics, ramp=args.ramp)
