@@ -317,8 +317,8 @@ def test_cli_bem_writes_netcdf(tmp_path, capsys):
     from hybridwsi.history import read_netcdf
 
     out = tmp_path / "c.nc"
-    rc = main(["bem", "--panels", "400", "--n-omega", "6", "--omega-max", "12", "--quiet",
-               "--cache-dir", str(tmp_path / "cache"), "--out", str(out)])
+    rc = main(["bem", "--panels", "400", "--n-omega", "6", "--omega-max", "12",
+               "--cache-dir", str(tmp_path / "cache"), "--out", str(out)])  # summary printed
     assert rc == 0 and out.is_file()
     text = capsys.readouterr().out
     assert "A_inf" in text and "Tn =" in text and "wall time" in text
@@ -337,7 +337,7 @@ def test_cli_bem_takes_any_body(tmp_path, capsys):
     spec.write_text(spar.to_json())
     out = tmp_path / "c.nc"
     rc = main(["bem", "--body", str(spec), "--panel-size", "0.25", "--dofs", "Heave,Pitch",
-               "--n-omega", "3", "--omega-max", "3", "--quiet", "--no-cache", "--out", str(out)])
+               "--n-omega", "3", "--omega-max", "3", "--no-cache", "--out", str(out)])
     assert rc == 0
     text = capsys.readouterr().out
     assert "Pitch: A_inf" in text and "N m/rad" in text

@@ -43,7 +43,7 @@ def assert_one_error_line(rc: int, err: str) -> None:
 
 @pytest.mark.parametrize("name", BAD_FILES)
 def test_bad_corpus_through_cli(name, capsys):
-    rc = main(["diagnose", str(BAD / name), "--force", "F_tot", "--mass", "7.06"])
+    rc = main(["diagnose", str(BAD / name), "--force-column", "F_tot", "--mass", "7.06"])
     assert_one_error_line(rc, capsys.readouterr().err)
 
 
@@ -60,9 +60,9 @@ def test_bad_corpus_through_import(name, capsys, tmp_path):
     ["diagnose", "--example", "--known", "spring=3"],
     ["diagnose", "--example", "--known", "quadratic_damping"],  # has no matrix to read
     ["diagnose", "--example", "--known", "hydrostatic", "--coeffs", str(BAD / "fake.nc")],
-    ["diagnose", "--example", "--force", "F_nope"],
+    ["diagnose", "--example", "--force-column", "F_nope"],
     ["diagnose", "--example", "--mass", "-1"],
-    ["diagnose", "--example", "--dt", "0"],
+    ["diagnose", "--example", "--target-dt", "0"],
     ["diagnose", str(DATA / "dsph_floatinginfo.csv"), "--zdot", "w"],
     ["diagnose", str(DATA / "dsph_floatingace.csv"), "--resample"],  # no z in the file
     ["import", str(DATA / "dsph_floatinginfo.csv"), "--out", "x.txt"],
@@ -106,7 +106,7 @@ def test_example_case1_and_case3_json(tmp_path, capsys):
     assert verdicts["prescribed_force"] == "drift"
 
     out3 = tmp_path / "case3.json"
-    assert main(["diagnose", "--example", *CASE3, "--dt", "0.01", "--json", str(out3)]) == 0
+    assert main(["diagnose", "--example", *CASE3, "--target-dt", "0.01", "--json", str(out3)]) == 0
     res3 = json.loads(out3.read_text())
     assert res3["alpha"] == pytest.approx(M + A, rel=1e-9)
     assert res3["gamma"] == pytest.approx(C, rel=1e-9)
@@ -130,7 +130,7 @@ def test_diagnose_csv_with_estimated_derivatives(tmp_path, capsys):
     csv = tmp_path / "zonly.csv"
     h.to_csv(ex.drop_vars(["zdot", "zddot"]), csv)
     out = tmp_path / "res.json"
-    assert main(["diagnose", str(csv), "--force", "F_tot", *CASE3, "--json", str(out)]) == 0
+    assert main(["diagnose", str(csv), "--force-column", "F_tot", *CASE3, "--json", str(out)]) == 0
     res = json.loads(out.read_text())
     # derivative error moves alpha/gamma a little along the unresolved direction only
     assert res["alpha"] == pytest.approx(M + A, rel=0.02)
@@ -162,7 +162,7 @@ def test_import_kramer_to_csv(tmp_path, capsys):
     src = Path(h.__file__).parents[1] / "data" / "kramer2021_sphere_decay" / \
         "05D_CI95_Normalized_every5th.csv"
     out = tmp_path / "k.csv"
-    assert main(["import", str(src), "--out", str(out), "--estimate-derivatives", "savgol"]) == 0
+    assert main(["import", str(src), "--out", str(out), "--derivatives", "savgol"]) == 0
     ds = read_history(out)
     assert ds["z"].values[0, 0] == pytest.approx(0.15, rel=3e-3)  # 0.5 D
     assert "savgol" in ds["zddot"].attrs["estimated"]

@@ -272,7 +272,7 @@ def test_diagnose_cli_takes_known_matrices_from_coeffs(tmp_path):
     to_netcdf(history(DOFS[::-1], mass=False), f)
     to_netcdf(six_dof_coefficients(), c)
     assert main(["diagnose", str(f), "--coeffs", str(c), "--known", "hydrostatic",
-                 "--known", "added_mass", "--dt", str(DT), "--json", str(out)]) == 0
+                 "--known", "added_mass", "--target-dt", str(DT), "--json", str(out)]) == 0
     res = json.loads(out.read_text())
     np.testing.assert_allclose(res["alpha"], _perm(M + A, [1, 0]), rtol=1e-7)
     np.testing.assert_allclose(res["gamma"], _perm(C, [1, 0]), rtol=1e-7)

@@ -234,7 +234,7 @@ def test_cli_bem_case_writes_the_shipped_coefficients(tmp_path, shipped, capsys)
     out = tmp_path / "oc3.nc"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        assert main(["bem", "--case", "oc3_hywind", "--out", str(out), "--quiet",
+        assert main(["bem", "--case", "oc3_hywind", "--out", str(out),
                      "--cache-dir", str(tmp_path / "cache")]) == 0
     ds = read_netcdf(out)
     assert co.dofs(ds) == list(RIGID_DOFS)

@@ -116,7 +116,7 @@ def test_cli_runs_and_rejects_bad_dp(tmp_path, capsys):
 
     out = tmp_path / "h.nc"
     assert main(["sph", "hydrostatic", "--dp", "0.04", "--tf", "0.05", "--out", str(out),
-                 "--no-progress"]) == 0
+                 "--quiet"]) == 0
     ds = read_netcdf(out)
     assert "p_bottom" in ds and "hybridwsi_version" in ds.attrs
     assert main(["sph", "hydrostatic", "--dp", "-1"]) == 2

@@ -49,7 +49,7 @@ def test_hybrid_cli_refuses_unstable_partition(tmp_path, files, capsys):
                "--test-fraction", "0.34"])
     assert rc == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]  # after the training progress bar
-    assert last.startswith("error:") and "predicted unstable" in last and "--force" in last
+    assert last.startswith("error:") and "predicted unstable" in last and "--allow-unstable" in last
 
 
 def test_cli_bad_input(tmp_path, capsys):

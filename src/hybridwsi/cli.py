@@ -2,18 +2,27 @@
 
 Each command lives in :mod:`hybridwsi.commands.<name>` and provides ``HELP`` (one line),
 ``add_arguments(parser)`` and ``run(args) -> int``. Commands are imported lazily so that
-``hybridwsi diagnose`` does not pay for importing Capytaine or PyTorch.
+``hybridwsi diagnose`` does not pay for importing Capytaine or PyTorch. Options shared by
+several commands come from :mod:`hybridwsi.commands._options` (one name, one meaning; the
+table is in docs/CLI.md).
 
-Errors that come from bad input (:class:`hybridwsi.errors.InputError`) are printed as one line
-``error: ...`` on stderr with exit status 2; never a traceback.
+Every failure the user can fix is printed as ONE line ``error: ...`` on stderr with exit
+status 2, never a traceback (warnings are printed as ``warning: ...`` lines after a successful
+run only): usage errors of argparse (:class:`Parser`), bad input
+(:class:`hybridwsi.errors.InputError`), solver failures, operating-system errors on the files,
+and a missing optional dependency (the message names the extra to install).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import sys
+import warnings
+from typing import NoReturn
 
+from hybridwsi.commands._options import missing_dependency, one_line
 from hybridwsi.errors import HybridWSIError
 
 #: command name -> module under hybridwsi.commands (module names are Python identifiers)
@@ -30,26 +39,43 @@ COMMANDS: dict[str, str] = {
     "coeffs": "coeffs",
 }
 
-
-def _available() -> dict[str, object]:
-    mods = {}
-    for name, modname in COMMANDS.items():
-        spec = importlib.util.find_spec(f"hybridwsi.commands.{modname}")
-        if spec is not None:
-            mods[name] = modname
-    return mods
+#: exit status of every error the user can fix (bad input, bad option, missing extra)
+EXIT_ERROR = 2
 
 
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+def print_error(message: str) -> None:
+    """The CLI's one error format: ``error: <message>`` on one stderr line."""
+    print(f"error: {one_line(message)}", file=sys.stderr)
+
+
+class Parser(argparse.ArgumentParser):
+    """ArgumentParser whose usage errors are one ``error: ...`` line and exit status 2.
+
+    argparse prints the usage and then the message; sub-parsers made by ``add_subparsers``
+    are of the parent's class, so one override covers the root parser and every command.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        print_error(f"{self.prog}: {message} (see: {self.prog} --help)")
+        sys.exit(EXIT_ERROR)
+
+
+def _available() -> dict[str, str]:
+    return {name: modname for name, modname in COMMANDS.items()
+            if importlib.util.find_spec(f"hybridwsi.commands.{modname}") is not None}
+
+
+def build_parser(only: str | None = None) -> Parser:
     """The top-level parser; with ``only``, import just that command's module."""
     from hybridwsi import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="hybridwsi",
         description="Hybrid (physics + ML) solvers for floating bodies in waves: "
         "stability diagnostic, BEM/Cummins and SPH generators, paper reproduction.",
     )
-    parser.add_argument("--version", action="version", version=f"hybridwsi {__version__}")
+    parser.add_argument("--version", action="version", version=f"hybridwsi {__version__}",
+                        help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, modname in _available().items():
         if only is not None and name != only:
@@ -62,24 +88,60 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _run(args: argparse.Namespace) -> int:
+    """Run a parsed command; every user-fixable failure becomes one ``error:`` line.
+
+    Warnings raised while the command runs are printed after it, one ``warning: ...`` line
+    each; when the command fails, only its error line is printed.
+    """
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            status = int(args._run(args) or 0)
+        for w in caught:  # re-issued, so that callers of main() still see them as warnings
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return status
+    except HybridWSIError as exc:
+        print_error(str(exc))
+    except ModuleNotFoundError as exc:
+        message = missing_dependency(exc.name)
+        if message is None:  # not an optional extra: a broken installation, keep the trace
+            raise
+        print_error(message)
+    except OSError as exc:  # disk full, permission denied... while writing or reading files
+        where = f" ({exc.filename})" if exc.filename else ""
+        print_error(f"{exc.strerror or exc}{where}")
+    except MemoryError:
+        print_error("out of memory: reduce the problem size (time steps, panels, cases)")
+    except KeyboardInterrupt:
+        print_error("interrupted (partial results were not written; re-run to resume)")
+        return 130
+    return EXIT_ERROR
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``hybridwsi`` console script; returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     cmd = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(only=cmd if cmd in COMMANDS else None)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version (0) or a usage error (2, already printed)
+        return int(exc.code or 0)
     if not getattr(args, "_run", None):
         parser.print_help()
-        return 0 if cmd is None else 2
+        return 0 if cmd is None else EXIT_ERROR
+    saved = warnings.formatwarning
+    warnings.formatwarning = _format_warning
     try:
-        return int(args._run(args) or 0)
-    except HybridWSIError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("error: interrupted (partial results were not written; re-run to resume)",
-              file=sys.stderr)
-        return 130
+        return _run(args)
+    finally:
+        warnings.formatwarning = saved
 
 
-if __name__ == "__main__":  # pragma: no cover
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning printed by the CLI: one ``warning: ...`` line, no source excerpt."""
+    return f"warning: {one_line(str(message))}\n"
+
+
+if __name__ == "__main__":  # python -m hybridwsi.cli
     sys.exit(main())

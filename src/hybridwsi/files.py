@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -113,3 +114,78 @@ def read_netcdf(path: str | os.PathLike) -> xr.Dataset:
             ds[base] = (ds[name] + 1j * ds[base + "__im"]).assign_attrs(ds[name].attrs)
             ds = ds.drop_vars([name, base + "__im"])
     return ds
+
+
+def _nearest_existing(path: Path) -> Path:
+    """``path`` itself or its closest ancestor that exists (the folder a write would create from)."""
+    for candidate in (path, *path.parents):
+        if os.path.lexists(candidate):
+            return candidate
+    return Path(path.anchor or ".")
+
+
+def _same_file(a: Path, b: str | os.PathLike) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # either side missing, a dangling link or a loop: not the same existing file
+        return Path(os.path.abspath(a)) == Path(os.path.abspath(b))
+
+
+def check_output_path(
+    out: str | os.PathLike,
+    inputs: Sequence[str | os.PathLike | None] = (),
+    *,
+    kind: str = "file",
+    products: Sequence[str] = (),
+) -> Path:
+    """Refuse an output path before any work is done; return it as a Path.
+
+    Refused: an output that is one of ``inputs`` (the same file after resolving links,
+    :func:`os.path.samefile`); an existing path that is not a regular file (``kind="file"``:
+    a device such as /dev/full, a folder, a dangling link or a symlink loop) or not a folder
+    (``kind="dir"``); a path below an existing non-folder; a parent folder that is not
+    writable. With ``kind="dir"``, ``products`` are the file names the command writes inside
+    the folder; each is checked the same way (e.g. a history named ``report.json`` in it).
+
+    Parameters
+    ----------
+    out : path-like
+        The output file or folder.
+    inputs : sequence of path-like or None
+        Files the command reads (None entries are skipped).
+    kind : {"file", "dir"}
+        What ``out`` must be.
+    products : sequence of str
+        With ``kind="dir"``: names of the files written inside ``out``.
+
+    Raises
+    ------
+    InputError
+        With a one-line message naming the option value and what is wrong.
+    """
+    if kind not in ("file", "dir"):
+        raise ValueError(f"kind must be 'file' or 'dir', got {kind!r}")
+    path = Path(out).expanduser()
+    if str(out) == "":
+        raise InputError("the output path is empty")
+    given = [p for p in inputs if p is not None]
+    targets = [path] if kind == "file" else [path / name for name in products]
+    for target in targets:
+        for src in given:
+            if _same_file(target, src):
+                raise InputError(f"output {target} is the input {src}: choose another output path "
+                                 "(an input is never overwritten)")
+        if kind == "dir" and os.path.lexists(target) and not target.is_file():
+            raise InputError(f"output {target} exists and is not a regular file")
+    if os.path.lexists(path):
+        if kind == "file" and not path.is_file():
+            what = "a folder" if path.is_dir() else "not a regular file"
+            raise InputError(f"output {path} exists and is {what}: give a file path")
+        if kind == "dir" and not path.is_dir():
+            raise InputError(f"output {path} exists and is not a folder: give a folder path")
+    base = _nearest_existing(path.parent if kind == "file" or not path.is_dir() else path)
+    if not base.is_dir():
+        raise InputError(f"cannot write {path}: {base} is not a folder")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write {path}: folder {base} is not writable")
+    return path

@@ -31,6 +31,8 @@ PROBLEM_OPTIONS = ("body", *SPHERE_DEFAULTS, "panels", "panel_size", "dofs")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from hybridwsi.commands import _options as o
+
     parser.add_argument("--case", default=None,
                         help="built-in case (hybridwsi.cases): its body and [bem] table; not "
                              "combined with the body, frequency and mesh options")
@@ -40,32 +42,51 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="body description: a JSON file or JSON text with a 'type' "
                              "(FloatingSphere, AxisymmetricBody, MeshBody, RigidAssembly); "
                              "replaces --radius/--mass/--rho/--g")
-    parser.add_argument("--radius", type=float, default=None, help="sphere radius [m] (0.15)")
-    parser.add_argument("--mass", type=float, default=None, help="sphere mass [kg] (7.06)")
-    parser.add_argument("--panels", type=int, default=None,
+    parser.add_argument("--radius", type=o.positive_float, default=None,
+                        help="sphere radius [m] (default 0.15)")
+    o.add_mass(parser, "of the sphere (default 7.06)")
+    parser.add_argument("--panels", type=o.positive_int, default=None, metavar="N",
                         help="approximate hull panel count (sphere default 6400)")
-    parser.add_argument("--panel-size", type=float, default=None,
+    parser.add_argument("--panel-size", type=o.positive_float, default=None, metavar="M",
                         help="hull panel size [m] (instead of --panels)")
-    parser.add_argument("--dofs", default=None,
-                        help="comma-separated DOFs, e.g. Surge,Heave,Pitch (default: the body's)")
-    parser.add_argument("--omega-min", type=float, default=None,
-                        help="lowest frequency [rad/s] (0.1)")
-    parser.add_argument("--omega-max", type=float, default=None,
-                        help="highest frequency [rad/s] (40)")
-    parser.add_argument("--n-omega", type=int, default=None,
-                        help="number of log-spaced frequencies (400)")
-    parser.add_argument("--depth", type=float, default=None, help="water depth [m] (inf)")
-    parser.add_argument("--rho", type=float, default=None, help="water density [kg/m^3] (998.2)")
-    parser.add_argument("--g", type=float, default=None, help="gravity [m/s^2] (9.81)")
+    o.add_dofs(parser, "the DOFs to solve (default: the body's)")
+    parser.add_argument("--omega-min", type=o.positive_float, default=None,
+                        help="lowest frequency [rad/s] (default 0.1)")
+    parser.add_argument("--omega-max", type=o.positive_float, default=None,
+                        help="highest frequency [rad/s] (default 40)")
+    parser.add_argument("--n-omega", type=o.positive_int, default=None,
+                        help="number of log-spaced frequencies (default 400)")
+    parser.add_argument("--depth", type=o.positive_float, default=None,
+                        help="water depth [m] (default: infinite)")
+    parser.add_argument("--rho", type=o.positive_float, default=None,
+                        help="water density [kg/m^3] (default 998.2)")
+    parser.add_argument("--g", type=o.positive_float, default=None,
+                        help="gravity [m/s^2] (default 9.81)")
     parser.add_argument("--method", choices=("direct", "indirect"), default=None,
-                        help="boundary integral formulation (direct)")
-    parser.add_argument("--out", default="coeffs.nc", help="output NetCDF file")
-    parser.add_argument("--cache-dir", default=None, help="cache folder")
+                        help="boundary-integral formulation of Capytaine (default direct)")
+    o.add_out(parser, "output coefficient NetCDF (default coeffs.nc)", default="coeffs.nc",
+              metavar="COEFFS.nc")
+    parser.add_argument("--cache-dir", default=None, metavar="DIR",
+                        help="cache folder (default ~/.cache/hybridwsi/bem or $HYBRIDWSI_CACHE/bem)")
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument("--jobs", type=int, default=None,
+    o.add_quiet(parser)
+    parser.add_argument("--workers", type=o.positive_int, default=None,
                         help="worker processes (default: $HYBRIDWSI_BEM_JOBS, else all CPUs for "
                              "long sweeps)")
+
+
+#: bytes per panel pair of Capytaine's dense influence matrices (S and K, complex128)
+BYTES_PER_PANEL_PAIR = 2 * 16
+
+
+def check_panels(n_panels: int | None, workers: int | None) -> None:
+    """Refuse a mesh whose dense BEM matrices cannot fit in memory (before meshing)."""
+    from hybridwsi.commands._options import check_allocation
+
+    if n_panels is not None:
+        check_allocation(BYTES_PER_PANEL_PAIR * float(n_panels) ** 2 * (workers or 1),
+                         f"--panels {n_panels} (dense N x N influence matrices)",
+                         "use fewer panels")
 
 
 def read_body(spec: str):
@@ -73,12 +94,19 @@ def read_body(spec: str):
     from hybridwsi.bodies import body_from_dict
     from hybridwsi.errors import InputError
 
+    from hybridwsi.history import read_text_file
+
     path = Path(spec).expanduser()
-    text = path.read_text() if path.is_file() else spec
+    looks_like_json = spec.lstrip().startswith(("{", "["))
+    text = spec if looks_like_json else read_text_file(path)
     try:
         data = json.loads(text)
-    except json.JSONDecodeError:
-        raise InputError(f"--body must be a JSON file or JSON text, got {spec!r}") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"--body: {spec if looks_like_json else path} is not valid JSON "
+                         f"({exc.msg} at line {exc.lineno})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"--body must describe one body as a JSON object, got "
+                         f"{type(data).__name__}")
     return body_from_dict(data)
 
 
@@ -102,6 +130,8 @@ def problem(args: argparse.Namespace) -> dict:
            for k in SPHERE_DEFAULTS}
     if not (0 < opt["omega_min"] < opt["omega_max"]) or opt["n_omega"] < 2:
         raise InputError("need 0 < --omega-min < --omega-max and --n-omega >= 2")
+    if args.panels is not None and args.panel_size is not None:
+        raise InputError("give --panels or --panel-size, not both")
     body = (read_body(args.body) if args.body is not None
             else FloatingSphere(radius=opt["radius"], mass=opt["mass"], rho=opt["rho"],
                                 g=opt["g"]))
@@ -112,15 +142,22 @@ def problem(args: argparse.Namespace) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridwsi.files import check_output_path
     from hybridwsi.history import to_netcdf
     from hybridwsi.hydro import bem
 
+    body_file = args.body if args.body and Path(args.body).expanduser().exists() else None
+    check_output_path(args.out, [body_file])
+    if args.cache_dir is not None and not args.no_cache:
+        check_output_path(args.cache_dir, kind="dir")
+    check_panels(args.panels, args.workers)
     start = time.perf_counter()
     ds = bem.compute(**problem(args), cache_dir=args.cache_dir, use_cache=not args.no_cache,
-                     progress=not args.quiet, n_jobs=args.jobs)
+                     progress=not args.quiet, n_jobs=args.workers)
     wall = time.perf_counter() - start
     to_netcdf(ds, args.out)
-    _print_summary(ds, wall, args.out)
+    if not args.quiet:
+        _print_summary(ds, wall, args.out)
     return 0
 
 

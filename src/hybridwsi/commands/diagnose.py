@@ -46,44 +46,40 @@ EXAMPLE = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from hybridwsi.commands import _options as o
+
     parser.add_argument("file", nargs="?", metavar="FILE", help="force/motion history file")
     parser.add_argument("--example", action="store_true",
                         help="run on a built-in synthetic multi-frequency forced oscillator")
-    parser.add_argument("--force", default="F_tot", metavar="COL",
-                        help="force variable/column to regress [N] (default F_tot)")
-    parser.add_argument("--format", default="auto",
-                        help="file format: auto, csv, netcdf, kramer, kramer-numerical, "
-                        "dualsphysics-info, dualsphysics-ace (default auto)")
-    for name, what in (("time", "time [s]"), ("z", "displacement [m]"),
-                       ("zdot", "velocity [m/s]"), ("zddot", "acceleration [m/s^2]")):
-        parser.add_argument(f"--{name}", metavar="COL", help=f"CSV column holding {what}")
+    parser.add_argument("--force-column", default="F_tot", metavar="COL",
+                        help="force variable/column to regress [N or N m] (default F_tot)")
+    o.add_format(parser)
+    o.add_columns(parser)
+    o.add_dofs(parser, "the DOFs to diagnose (a CSV: the DOF names of its columns, default its "
+               "'# dof:' line, else Heave; other files: a subset of theirs)")
     parser.add_argument("--known", action="append", default=[], metavar="NAME[=VALUE]",
                         help="known component removed from the force with its physical sign: "
                         "hydrostatic=C [N/m], added_mass_inf=A [kg] (alias added_mass), "
                         "linear_damping=B [N s/m] (alias damping), quadratic_damping=Bq; "
                         "'hydrostatic' and 'added_mass_inf' without a value take their "
                         "matrix from the history or from --coeffs (repeatable)")
-    parser.add_argument("--coeffs", metavar="FILE",
-                        help="coefficient file (NetCDF from 'hybridwsi bem') supplying C, A_inf "
-                        "and the mass for the history's DOFs")
-    parser.add_argument("--mass", type=float, metavar="M",
-                        help="body mass [kg] (default: the history's, else --coeffs'; enables "
-                        "the stability assessment)")
-    parser.add_argument("--fix-alpha", type=float, metavar="A",
+    o.add_coeffs(parser, "supplies C, A_inf and the mass for the history's DOFs")
+    o.add_mass(parser, "default the history's, else --coeffs'; enables the stability "
+               "assessment")
+    parser.add_argument("--fix-alpha", type=o.finite_float, metavar="A",
                         help="fix alpha [kg] (e.g. m + A_inf) and regress only beta, gamma")
-    parser.add_argument("--force-accuracy", type=float, default=0.01, metavar="EPS",
+    parser.add_argument("--force-accuracy", type=o.positive_float, default=0.01, metavar="EPS",
                         help="relative accuracy of the force (default 0.01, typical of CFD/SPH; "
                         "~2e-4 for Cummins histories): alpha and gamma count as identifiable only "
                         "when a larger force error is needed to move either by 10 %%")
-    parser.add_argument("--dt", type=float, metavar="DT",
-                        help="time step [s] of the coupled solver for the loosely coupled check")
+    parser.add_argument("--target-dt", type=o.positive_float, metavar="S",
+                        help="time step [s] of the coupled solver for the loosely coupled check "
+                        "(not the history's sampling step)")
     parser.add_argument("--resample", action="store_true",
                         help="resample irregular time steps onto a uniform grid (cubic)")
-    parser.add_argument("--derivatives", choices=("savgol", "spline"), default="savgol",
-                        help="method for missing zdot/zddot (default savgol)")
-    parser.add_argument("--window", type=int, metavar="N",
-                        help="Savitzky-Golay window [samples] (default: chosen from the data)")
-    parser.add_argument("--json", metavar="OUT", help="write the results as JSON (atomically)")
+    o.add_derivatives(parser, "default savgol", default="savgol")
+    o.add_json(parser)
+    o.add_quiet(parser)
 
 
 def example_history() -> xr.Dataset:
@@ -122,19 +118,19 @@ def example_history() -> xr.Dataset:
 
 def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[str, Any]]:
     """The history to diagnose and a description of where it came from."""
-    from hybridwsi.importers import read_history
+    from hybridwsi.commands._options import read_dofs, select_dofs
 
     if args.example:
         if args.file:
             raise InputError("give either FILE or --example, not both")
-        return example_history(), {"file": None, "example": EXAMPLE}
+        return select_dofs(example_history(), args.dofs), {"file": None, "example": EXAMPLE}
     if not args.file:
         raise InputError("no input: give a history FILE (CSV, NetCDF, ...) or --example")
     mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot")}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hist = read_history(args.file, format=args.format, mass=args.mass,
-                            resample=args.resample, **mapping)
+        hist = read_dofs(args.file, args.dofs, format=args.format, mass=args.mass,
+                         resample=args.resample, **mapping)
     notes += [str(w.message) for w in caught]
     info = {"file": str(Path(args.file)), "format": hist.attrs.get("format"),
             "columns": {k: v for k, v in mapping.items() if v is not None}}
@@ -153,20 +149,20 @@ def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr
                          "the diagnostic needs z(t)")
     absent = [k for k in ("zdot", "zddot") if k not in hist]
     if absent:
-        hist = estimate_derivatives(hist, method=args.derivatives, window=args.window)
+        hist = estimate_derivatives(hist, method=args.derivatives, window=args.savgol_window)
         for k in absent:
             notes.append(f"{k} was not in the file: estimated from z by "
                          f"{hist[k].attrs['estimated']}")
-    if args.force not in hist:
+    if args.force_column not in hist:
         from hybridwsi.history import split_header
 
-        base = split_header(args.force)[0]
+        base = split_header(args.force_column)[0]
         if base in hist and hist[base].attrs.get("role") == "force":
-            args.force = base
+            args.force_column = base
         else:
             have = ", ".join(force_names(hist)) or "none"
-            raise InputError(f"no force '{args.force}' in the history (force columns: {have}); "
-                             "choose one with --force")
+            raise InputError(f"no force '{args.force_column}' in the history (force columns: "
+                             f"{have}); choose one with --force-column")
     return hist
 
 
@@ -207,15 +203,14 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
     if mass is None:
         notes.append("no mass given (--mass): stability assessment skipped")
         return None
-    if args.dt is not None and (not np.isfinite(args.dt) or args.dt <= 0):
-        raise InputError(f"--dt must be a positive time step in s, got {args.dt}")
     try:
         from hybridwsi.diagnostic.stability import assess
     except ImportError:
         notes.append("stability assessment is not available in this installation")
         return None
     m = np.asarray(mass, dtype=float)
-    reports = assess(result, float(m.ravel()[0]) if m.size == 1 else m, known, dt=args.dt)
+    reports = assess(result, float(m.ravel()[0]) if m.size == 1 else m, known,
+                     dt=args.target_dt)
     if isinstance(reports, dict):
         reports = list(reports.values())
     elif not isinstance(reports, (list, tuple)):
@@ -223,19 +218,14 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
     return [r.to_dict() for r in reports]
 
 
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split())
-
-
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """Run the whole diagnosis: ``(JSON-ready dict, RegressionResult)``."""
     from hybridwsi import __version__
+    from hybridwsi.commands._options import one_line
     from hybridwsi.diagnostic.regression import regress
 
     notes: list[str] = []
     _known(args.known, None, None)  # fail fast on a bad --known
-    if args.mass is not None and (not np.isfinite(args.mass) or args.mass <= 0):
-        raise InputError(f"--mass must be a positive mass in kg, got {args.mass}")
     coeffs = _coefficients(args)
     hist, info = _load(args, notes)
     hist = _prepare(hist, args, notes)
@@ -243,20 +233,20 @@ def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            result = regress(hist, force=args.force, known=known, fix_alpha=args.fix_alpha,
+            result = regress(hist, force=args.force_column, known=known, fix_alpha=args.fix_alpha,
                             force_accuracy=args.force_accuracy)
             stability = _stability(result, hist, known, args, notes, coeffs)
         except InputError:
             raise
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            raise InputError(f"the diagnostic failed on this history: {_one_line(exc)}") from None
+            raise InputError(f"the diagnostic failed on this history: {one_line(exc)}") from None
     notes += [str(w.message) for w in caught]
     out = result.to_dict()
     out["warnings"] = notes + list(out.get("warnings", []))
     out["stability"] = stability
-    out["input"] = {**info, "force": args.force, "known": list(args.known),
-                    "coeffs": args.coeffs,
-                    "fix_alpha": args.fix_alpha, "dt": args.dt,
+    out["input"] = {**info, "force": args.force_column, "known": list(args.known),
+                    "coeffs": args.coeffs, "dofs": [str(d) for d in hist["dof"].values],
+                    "fix_alpha": args.fix_alpha, "dt": args.target_dt,
                     "n_samples": int(hist.sizes["time"]),
                     "estimated": {k: hist[k].attrs["estimated"]
                                   for k in ("zdot", "zddot") if "estimated" in hist[k].attrs}}
@@ -274,15 +264,19 @@ def _print(out: dict[str, Any], result: Any, notes_count: int) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.history import write_json
+    from hybridwsi.files import check_output_path, write_json
 
+    if args.json:
+        check_output_path(args.json, [args.file, args.coeffs])
     out, result = diagnose(args)
     n_notes = len(out["warnings"]) - len(result.warnings)
-    _print(out, result, n_notes)
-    if args.example and not args.known:
-        print("try: hybridwsi diagnose --example --known hydrostatic=692.2 "
-              "--known added_mass_inf=3.5")
+    if not args.quiet:
+        _print(out, result, n_notes)
+        if args.example and not args.known:
+            print("try: hybridwsi diagnose --example --known hydrostatic=692.2 "
+                  "--known added_mass_inf=3.5")
     if args.json:
         write_json(args.json, out)
-        print(f"wrote {args.json}")
+        if not args.quiet:
+            print(f"wrote {args.json}")
     return 0

@@ -22,57 +22,58 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from hybridwsi.importers import FORMATS
+    from hybridwsi.commands import _options as o
 
     parser.add_argument("file", metavar="FILE", help="file to import")
-    parser.add_argument("--out", required=True, metavar="HISTORY",
-                        help="output TimeHistory (.nc NetCDF or .csv)")
-    parser.add_argument("--format", default="auto", choices=("auto", *FORMATS),
-                        help="input format (default: detected from the content)")
-    for name, what in (("time", "time [s]"), ("z", "displacement [m]"),
-                       ("zdot", "velocity [m/s]"), ("zddot", "acceleration [m/s^2]")):
-        parser.add_argument(f"--{name}", metavar="COL", help=f"CSV column holding {what}")
-    parser.add_argument("--force", action="append", metavar="COL", dest="forces",
-                        help="CSV force column [N] to import (repeatable; default: every "
+    o.add_out(parser, "output TimeHistory (.nc NetCDF or .csv)", required=True,
+              metavar="HISTORY")
+    o.add_format(parser)
+    o.add_columns(parser)
+    parser.add_argument("--force-column", action="append", metavar="COL", dest="forces",
+                        help="CSV force column [N or N m] to import (repeatable; default: every "
                         "other numeric column with a force unit or no unit)")
     parser.add_argument("--sep", help="CSV separator (default: detected; 'whitespace' allowed)")
-    parser.add_argument("--dof", help="DOF name(s) of a CSV file, e.g. Pitch or Surge,Pitch "
-                        "(default: the file's '# dof:' line, else Heave)")
-    parser.add_argument("--mass", type=float, metavar="M", help="body mass [kg] to store")
-    parser.add_argument("--drop-height", type=float, metavar="H",
+    o.add_dofs(parser, "the DOF names of a CSV's columns, e.g. Pitch or Surge,Pitch (default "
+               "the file's '# dof:' line, else Heave); other files: a subset of theirs")
+    o.add_mass(parser, "stored in the history (default: the file's, if any)")
+    parser.add_argument("--drop-height", type=o.positive_float, metavar="H",
                         help="Kramer 2021 measured files: drop height [m] (default from the "
                         "file name: 01D -> 0.03 m)")
-    parser.add_argument("--mkbound", type=int, help="DualSPHysics: floating body to keep")
+    parser.add_argument("--mkbound", type=o.nonnegative_int,
+                        help="DualSPHysics: MkBound number of the floating body to keep")
     parser.add_argument("--resample", action="store_true",
                         help="resample irregular time steps onto a uniform grid (cubic)")
-    parser.add_argument("--estimate-derivatives", choices=("savgol", "spline"),
-                        help="also fill missing zdot/zddot from z with this method")
+    o.add_derivatives(parser, "fill missing zdot/zddot with this method (default: leave "
+                      "them out)", default=None)
+    o.add_quiet(parser)
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridwsi.commands._options import read_dofs
+    from hybridwsi.files import check_output_path
     from hybridwsi.history import estimate_derivatives, force_names, to_csv, to_netcdf
-    from hybridwsi.importers import read_history
 
     out = Path(args.out)
     if out.suffix.lower() not in (".nc", ".csv"):
         raise InputError(f"--out must end in .nc (NetCDF) or .csv, got '{out.name}'")
-    if args.mass is not None and not args.mass > 0:
-        raise InputError(f"--mass must be a positive mass in kg, got {args.mass}")
+    check_output_path(out, [args.file])
     options = {"time": args.time, "z": args.z, "zdot": args.zdot, "zddot": args.zddot,
-               "forces": args.forces, "sep": args.sep, "dof": args.dof,
-               "drop_height": args.drop_height, "mkbound": args.mkbound}
+               "forces": args.forces, "sep": args.sep, "drop_height": args.drop_height,
+               "mkbound": args.mkbound}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hist = read_history(args.file, format=args.format, mass=args.mass,
-                            resample=args.resample, **options)
-    if args.estimate_derivatives:
+        hist = read_dofs(args.file, args.dofs, format=args.format, mass=args.mass,
+                         resample=args.resample, **options)
+    if args.derivatives:
         if "z" not in hist:
             raise InputError("cannot estimate derivatives: the history has no z")
-        hist = estimate_derivatives(hist, method=args.estimate_derivatives)
+        hist = estimate_derivatives(hist, method=args.derivatives, window=args.savgol_window)
     try:
         (to_csv if out.suffix.lower() == ".csv" else to_netcdf)(hist, out)
     except OSError as exc:
         raise InputError(f"cannot write {out}: {exc.strerror or exc}") from None
+    if args.quiet:
+        return 0
     t = hist["time"].values
     kin = [k for k in ("z", "zdot", "zddot") if k in hist]
     print(f"{args.file} ({hist.attrs.get('format')}) -> {out}: {t.size} samples, "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 HELP = "reproduce the paper (Table 1, Fig. 1, Fig. 2) into a results folder"
@@ -15,12 +16,14 @@ DESCRIPTION = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", default="results", help="results folder (default: results)")
+    from hybridwsi.commands import _options as o
+
+    o.add_out(p, "results folder (default: results)", default="results", metavar="DIR")
     p.add_argument("--quick", action="store_true", help="coarse BEM mesh, for tests and a first look")
     p.add_argument("--no-decay", action="store_true", help="skip the decay validation (Fig. 1)")
     p.add_argument("--no-hybrid", action="store_true",
                    help="skip the outlook (component selection and hybrid-solver demo)")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
+    o.add_quiet(p)
     sph = p.add_mutually_exclusive_group()
     sph.add_argument("--recompute-sph", action="store_true",
                      help="run the SPH regular-wave case now for Table 1's SPH column (hours; "
@@ -28,20 +31,34 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     sph.add_argument("--sph-history", default=None, metavar="FILE",
                      help="history for the SPH column: NetCDF/CSV/DualSPHysics FloatingInfo "
                           "(default: the one shipped with the package, if any)")
-    p.add_argument("--sph-dp", type=float, default=None,
+    p.add_argument("--sph-dp", type=o.positive_float, default=None, metavar="M",
                    help="particle spacing [m] of --recompute-sph (default: the case's)")
     p.add_argument("--sph-openmp", action="store_true",
                    help="compile the SPH kernels with OpenMP (threads from OMP_NUM_THREADS)")
 
 
-def run(args: argparse.Namespace) -> int:
+def check_inputs(args: argparse.Namespace) -> None:
+    """Check every input before the first expensive step (BEM, Cummins, SPH)."""
+    from hybridwsi.commands._options import require
     from hybridwsi.errors import InputError
+    from hybridwsi.files import check_output_path
+    from hybridwsi.importers import read_history
+
+    out = check_output_path(args.out, [args.sph_history], kind="dir")
+    if args.sph_history is not None:
+        src = Path(os.path.realpath(Path(args.sph_history).expanduser()))  # loops do not raise
+        if Path(os.path.realpath(out)) in src.parents:  # the results folder is replaced whole
+            raise InputError(f"--sph-history {args.sph_history} lies inside the results folder "
+                             f"{args.out}; move it out or choose another --out")
+        read_history(args.sph_history)  # a bad file is refused now, not after BEM and Cummins
+    if args.recompute_sph:
+        require("pysph")
+
+
+def run(args: argparse.Namespace) -> int:
     from hybridwsi.report.reproduce import run as reproduce
 
-    if args.sph_dp is not None and not args.sph_dp > 0:
-        raise InputError(f"--sph-dp must be positive, got {args.sph_dp}")
-    if args.sph_history is not None and not Path(args.sph_history).is_file():
-        raise InputError(f"--sph-history: no such file {args.sph_history}")
+    check_inputs(args)
     reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay,
               hybrid=not args.no_hybrid, recompute_sph=args.recompute_sph,
               sph_path=args.sph_history, sph_dp=args.sph_dp, sph_openmp=args.sph_openmp)

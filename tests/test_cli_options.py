@@ -1,0 +1,248 @@
+"""The command-line layer: one meaning per option, help on every option, one-line errors,
+the output-path guard and missing optional dependencies."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from hybridwsi import cli
+from hybridwsi.commands import _options as o
+from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+
+SRC = Path(cli.__file__).resolve().parents[1]
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+@pytest.fixture(scope="module")
+def parsers() -> dict[str, argparse.ArgumentParser]:
+    return _subparsers(cli.build_parser())
+
+
+def test_every_command_is_built(parsers):
+    assert set(parsers) == set(cli.COMMANDS)
+
+
+def test_every_option_has_help(parsers):
+    missing = []
+    for name, p in {"hybridwsi": cli.build_parser(), **parsers}.items():
+        for action in p._actions:
+            if isinstance(action, (argparse._HelpAction, argparse._SubParsersAction)):
+                continue
+            if action.help == argparse.SUPPRESS:  # deprecated hidden aliases
+                continue
+            if not (action.help or "").strip():
+                missing.append(f"{name} {'/'.join(action.option_strings) or action.dest}")
+    assert not missing, f"options without help: {missing}"
+
+
+#: option -> commands allowed to have it; the same name must mean the same thing everywhere
+#: (docs/CLI.md). Options that were overloaded before must not come back.
+RETIRED = ("--force", "--window", "--dof", "--jobs", "--stride", "--gamma",
+           "--estimate-derivatives", "--lr")
+
+
+def test_retired_option_names_are_gone(parsers):
+    for name, p in parsers.items():
+        for opt in RETIRED:
+            assert opt not in p._option_string_actions, f"{name} still has {opt}"
+
+
+def test_dofs_wherever_dofs_matter(parsers):
+    for name in ("import", "diagnose", "simulate", "select", "bem", "sweep", "hybrid"):
+        action = parsers[name]._option_string_actions["--dofs"]
+        assert action.type is o.dof_names, name
+    assert parsers["diagnose"].parse_args(["--dofs", "surge,Pitch"]).dofs == ("Surge", "Pitch")
+
+
+def test_quiet_everywhere(parsers):
+    for name, p in parsers.items():
+        assert "--quiet" in p._option_string_actions, name
+    # the old spelling of sph still works, hidden
+    assert parsers["sph"].parse_args(["hydrostatic", "--no-progress"]).quiet is True
+
+
+def test_shared_options_share_one_definition(parsers):
+    """--mass, --coeffs, --out: same type and metavar family in every command."""
+    for name, p in parsers.items():
+        acts = p._option_string_actions
+        if "--mass" in acts:
+            assert acts["--mass"].type is o.positive_float, name
+            assert acts["--mass"].help.startswith("rigid-body mass [kg]"), name
+        if "--coeffs" in acts:
+            assert acts["--coeffs"].help.startswith("coefficient file"), name
+
+
+def test_hybrid_training_options_default_to_the_former_constants(parsers):
+    args = parsers["hybrid"].parse_args(["a.nc", "b.nc", "--out", "x"])
+    assert (args.learning_rate, args.patience, args.batch_size) == (3e-3, 30, 128)
+    assert args.hidden == (32,) and args.feature_window == 11 and args.train_seed == 0
+    assert parsers["hybrid"].parse_args(["a.nc", "--out", "x", "--hidden", "16,8"]).hidden \
+        == (16, 8)
+
+
+@pytest.mark.parametrize("kind,text", [
+    (o.positive_float, "nan"), (o.positive_float, "inf"), (o.positive_float, "-inf"),
+    (o.positive_float, "0"), (o.positive_float, "-1e-3"), (o.positive_float, "abc"),
+    (o.nonnegative_float, "-1"), (o.finite_float, "nan"), (o.positive_int, "0"),
+    (o.positive_int, "1.5"), (o.nonnegative_int, "-1"), (o.fraction, "1"), (o.fraction, "0"),
+    (o.positive_floats, "0.1,nan"), (o.positive_floats, ","), (o.positive_ints, "abc"),
+    (o.dof_names, "Heave,Wobble"), (o.dof_names, "Heave,heave"),
+    (o.scheduler_address, "notaurl"), (o.scheduler_address, "tcp://"),
+])
+def test_types_refuse(kind, text):
+    with pytest.raises(argparse.ArgumentTypeError):
+        kind(text)
+
+
+def test_types_accept():
+    assert o.positive_float("1e-3") == 1e-3 and o.nonnegative_float("0") == 0.0
+    assert o.positive_floats("0.1, 0.2") == (0.1, 0.2) and o.positive_ints("32,16") == (32, 16)
+    assert o.scheduler_address("tcp://10.0.0.1:8786") == "tcp://10.0.0.1:8786"
+
+
+@pytest.mark.parametrize("argv", [
+    ["frobnicate"], ["--bogus"], ["diagnose", "--bogus"], ["simulate", "--dt", "nan"],
+    ["simulate"], ["hybrid", "--hidden", "abc"], ["sph", "tsunami"],
+])
+def test_usage_errors_are_one_line(argv, capsys):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: hybridwsi"), err
+    assert "usage:" not in err
+
+
+def test_help_still_exits_zero(capsys):
+    assert cli.main(["diagnose", "--help"]) == 0
+    assert "--force-column" in capsys.readouterr().out
+
+
+# ----------------------------------------------------------------------- output guard
+def test_output_guard(tmp_path):
+    src = tmp_path / "h.csv"
+    src.write_text("x\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(src)
+    with pytest.raises(InputError, match="is the input"):
+        check_output_path(src, [src])
+    with pytest.raises(InputError, match="is the input"):
+        check_output_path(link, [src])  # the same file through a link
+    with pytest.raises(InputError, match="is the input"):
+        check_output_path(tmp_path / "." / "h.csv", [str(src)])
+    with pytest.raises(InputError, match="not a regular file"):
+        check_output_path("/dev/full")
+    with pytest.raises(InputError, match="folder"):
+        check_output_path(tmp_path)
+    with pytest.raises(InputError, match="not a folder"):
+        check_output_path(src / "x.nc")
+    with pytest.raises(InputError, match="not a folder"):
+        check_output_path(src, kind="dir")
+    with pytest.raises(InputError, match="is the input"):
+        check_output_path(tmp_path, [src], kind="dir", products=("h.csv",))
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)
+    with pytest.raises(InputError, match="not a regular file"):
+        check_output_path(loop)
+    # new files, new folders, an existing regular file that is no input: fine
+    assert check_output_path(tmp_path / "new" / "deeper" / "x.nc", [src]).name == "x.nc"
+    assert check_output_path(tmp_path / "h2.csv", [src, None])
+    assert check_output_path(tmp_path / "results", [src], kind="dir")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write into read-only folders")
+def test_output_guard_unwritable_folder(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        with pytest.raises(InputError, match="not writable"):
+            check_output_path(ro / "x.nc")
+    finally:
+        ro.chmod(0o700)
+
+
+def test_diagnose_never_overwrites_its_input(tmp_path, capsys):
+    from hybridwsi.commands.diagnose import example_history
+    from hybridwsi.history import to_csv
+
+    csv = tmp_path / "h.csv"
+    to_csv(example_history(), csv)
+    before = csv.read_bytes()
+    assert cli.main(["diagnose", str(csv), "--json", str(csv)]) == 2
+    assert "is the input" in capsys.readouterr().err
+    assert csv.read_bytes() == before
+
+
+# ----------------------------------------------------------------- optional dependencies
+@pytest.mark.parametrize("module,extra,argv", [
+    ("torch", "ml", ["hybrid", "a.nc", "b.nc", "--out", "{tmp}/n"]),
+    ("distributed", "sweep", ["sweep", "--hs", "0.1", "--tp", "1", "--out", "{tmp}/s"]),
+    ("pysph", "sph", ["sph", "hydrostatic", "--out", "{tmp}/s.nc"]),
+])
+def test_missing_extra_is_one_line(module, extra, argv, monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, module, None)  # import raises ImportError
+    rc = cli.main([a.replace("{tmp}", str(tmp_path)) for a in argv])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1, err
+    assert f"pip install 'hybridwsi[{extra}]'" in err and module in err
+
+
+def test_missing_extra_deep_inside_a_command(monkeypatch, capsys):
+    """A missing optional module found late (not by require) is still one line."""
+    def run(args):
+        import h5py  # noqa: F401
+
+    monkeypatch.setitem(sys.modules, "h5py", None)
+    ns = argparse.Namespace(_run=run)
+    assert cli._run(ns) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "hybridwsi[bemio]" in err
+
+
+def test_missing_extra_messages():
+    for module, extra in o.EXTRAS.items():
+        assert f"hybridwsi[{extra}]" in o.missing_dependency(module)
+    assert o.missing_dependency("numpy") is None
+
+
+# ------------------------------------------------------------------------ resources
+def test_allocation_estimate_refuses_before_allocating():
+    with pytest.raises(InputError, match="GiB"):
+        o.check_steps(1e9, 1e-9, 1)
+    assert o.check_steps(30.0, 0.01, 6) == 3001
+
+
+# ------------------------------------------------------------------------ python -m
+@pytest.mark.parametrize("module", ["hybridwsi.cli", "hybridwsi"])
+def test_python_dash_m(module, tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    proc = subprocess.run([sys.executable, "-m", module, "--version"], capture_output=True,
+                          text=True, env=env, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stdout.startswith("hybridwsi "), proc.stderr
+
+
+def test_select_dofs_keeps_units_per_dof():
+    import numpy as np
+
+    from hybridwsi.history import make_history, units_per_dof
+
+    t = np.arange(0, 1, 0.1)
+    z = np.zeros((t.size, 2))
+    h = make_history(t, z, z, z, {"F_tot": z}, dof=["Surge", "Pitch"], mass=np.eye(2))
+    p = o.select_dofs(h, ("Pitch",))
+    assert list(p["dof"].values) == ["Pitch"] and units_per_dof(p, "z") == ["rad"]
+    assert units_per_dof(p, "F_tot") == ["N m"] and p["mass"].shape == (1, 1)
+    with pytest.raises(InputError, match="no DOF Heave"):
+        o.select_dofs(h, ("Heave",))
