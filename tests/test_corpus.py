@@ -36,24 +36,8 @@ FORKSERVER = HERE / "corpus" / "forkserver.py"
 #: seconds a single case may take before it counts as hung
 CASE_TIMEOUT = 90
 
-#: cases that fail because of the data layer (readers, units, masses, reproduce's own input
-#: checks), fixed by the engineer of issue 16's data layer at the same time: id -> reason
-_READERS = ("diagnose", "import", "select", "hybrid", "reproduce")
-_REASONS = {
-    "units in NetCDF attrs are not yet honoured or refused (files.read_netcdf, issue 16.3)":
-        ("unitless.nc", "wrong_unit_z.nc", "wrong_unit_force.nc"),
-    "impossible masses are not yet refused (history.set_mass/validate, issue 16.3)":
-        ("negative_mass.nc", "negative_mass_header.csv", "zero_mass_header.csv"),
-    "1e300 values are not yet refused (history.validate, issue 16.3)":
-        ("huge_z.csv", "huge_z.nc", "huge_force.csv"),
-}
-DATA_LAYER: dict[str, str] = {f"{cmd}[{name}]": reason for reason, names in _REASONS.items()
-                              for name in names for cmd in _READERS}
-DATA_LAYER.update({
-    f"reproduce[{name}]": "reproduce checks the SPH history's variables only after BEM and "
-                          "Cummins (report/reproduce.py, issue 16.5)"
-    for name in ("all_zero_motion.csv", "huge_force.csv", "huge_z.csv",
-                 "negative_mass_header.csv", "zero_mass_header.csv")})
+#: cases that fail for a known reason outside the command layer: id -> reason (none now)
+DATA_LAYER: dict[str, str] = {}
 
 
 @dataclass

@@ -38,11 +38,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def check_inputs(args: argparse.Namespace) -> None:
-    """Check every input before the first expensive step (BEM, Cummins, SPH)."""
+    """Check the paths before anything runs; the SPH history's content is checked by
+    :func:`hybridwsi.report.reproduce.run` before its first expensive step."""
     from hybridwsi.commands._options import require
     from hybridwsi.errors import InputError
     from hybridwsi.files import check_output_path
-    from hybridwsi.importers import read_history
 
     out = check_output_path(args.out, [args.sph_history], kind="dir")
     if args.sph_history is not None:
@@ -50,7 +50,6 @@ def check_inputs(args: argparse.Namespace) -> None:
         if Path(os.path.realpath(out)) in src.parents:  # the results folder is replaced whole
             raise InputError(f"--sph-history {args.sph_history} lies inside the results folder "
                              f"{args.out}; move it out or choose another --out")
-        read_history(args.sph_history)  # a bad file is refused now, not after BEM and Cummins
     if args.recompute_sph:
         require("pysph")
 

@@ -233,6 +233,10 @@ def set_mass(ds: xr.Dataset, mass: float | np.ndarray) -> xr.Dataset:
     return out
 
 
+#: largest |value| of a kinematic or force variable: beyond it squares overflow float64
+MAX_MAGNITUDE = 1e150
+
+
 def validate(
     ds: xr.Dataset,
     *,
@@ -291,6 +295,10 @@ def validate(
                 f"'{name}' has {int(bad.sum())} NaN/inf value(s), first at row {i} "
                 f"(t = {t[i]:.6g} s)"
             )
+        peak = float(np.max(np.abs(var.values))) if var.size else 0.0
+        if peak > MAX_MAGNITUDE:  # its squares (regression, energy, RMS) would overflow
+            raise InputError(f"'{name}' reaches {peak:.3g} (in SI units): not a physical value "
+                             f"(limit {MAX_MAGNITUDE:.0e})")
     if "mass" in ds:
         check_mass(np.atleast_2d(np.asarray(ds["mass"].values, dtype=float)), ds.sizes["dof"])
     check_si(ds)

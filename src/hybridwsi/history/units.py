@@ -148,7 +148,13 @@ def _per_dof_units(attrs: dict, n_dof: int, name: str) -> list[str | None]:
         if not isinstance(per, list) or len(per) != n_dof:
             raise InputError(f"'{name}' units_per_dof {attrs['units_per_dof']!r} does not "
                              f"list one unit per DOF ({n_dof})")
-        return [None if u is None else str(u) for u in per]
+        per = [None if u is None else str(u) for u in per]
+        if "units" in attrs:  # the CF attribute must name the same units as our per-DOF list
+            listed = {normalise_unit(p.strip()) for p in str(attrs["units"]).split(",")}
+            if listed != {normalise_unit(u) for u in per if u is not None}:
+                raise InputError(f"'{name}' has units '{attrs['units']}' but units_per_dof "
+                                 f"{attrs['units_per_dof']}: the two disagree")
+        return per
     units = attrs.get("units")
     if units is None:
         return [None] * n_dof

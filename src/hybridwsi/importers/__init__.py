@@ -131,6 +131,18 @@ _READERS: dict[str, Callable[..., xr.Dataset]] = {
 }
 
 
+def _require_units(ds, path) -> None:
+    """A NetCDF history must say its units: a missing attribute would be read as SI silently."""
+    from hybridwsi.history import KINEMATICS, force_names
+
+    names = ["time", *(k for k in KINEMATICS if k in ds.variables), *force_names(ds)]
+    missing = [n for n in names if n in ds.variables and "units" not in ds.variables[n].attrs
+               and "units_per_dof" not in ds.variables[n].attrs]
+    if missing:
+        raise InputError(f"{path}: variable(s) {', '.join(missing)} have no 'units' attribute; "
+                         "add them (e.g. s, m, rad, N, N m) so that nothing is guessed")
+
+
 def read_history(
     path: str | os.PathLike,
     *,
@@ -174,6 +186,7 @@ def read_history(
         if options:
             raise InputError(f"option(s) {', '.join(options)} do not apply to NetCDF files")
         ds = read_netcdf(path)
+        _require_units(ds, path)
         ds = finalize_import(ds, resample_to_uniform=resample, require_z="zddot" not in ds)
     else:
         reader = _READERS[fmt]
