@@ -1,0 +1,114 @@
+"""The floating-wind report section (``hybridwsi.report.fowt``) on OC3-Hywind.
+
+References: Jonkman 2010 (NREL/TP-500-47535) Eq. 5-2/5-3 and the OC3 natural frequencies
+(0.0080, 0.0324, 0.034 Hz); the RAOs against the frequency-domain solution of the same
+linear system (an independent route: complex linear algebra at ω, no time stepping).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from hybridwsi.cases import load_case
+from hybridwsi.hydro import bem
+
+pytest.importorskip("moorpy")
+fowt = pytest.importorskip("hybridwsi.report.fowt")
+
+CASE = load_case("oc3_hywind")
+
+
+@pytest.fixture(scope="module")
+def section(tmp_path_factory) -> tuple[Path, str]:
+    out = tmp_path_factory.mktemp("report")
+    md = fowt.run_fowt(out, quick=True, progress=False)
+    return out / "fowt", md
+
+
+def _json(folder: Path, name: str):
+    return json.loads((folder / name).read_text())
+
+
+def test_files_and_json_shapes(section):
+    folder, md = section
+    for name in ("mooring.json", "natural_frequencies.json", "rao.json", "rao.png", "rao.nc",
+                 "decay.png", "decay.nc"):
+        assert (folder / name).stat().st_size > 0, name
+    nat = _json(folder, "natural_frequencies.json")
+    assert list(nat) == ["surge", "heave", "pitch"]
+    for entry in nat.values():
+        assert {"hz", "reference_hz", "from_decay_hz"} <= set(entry)
+        assert all(isinstance(entry[k], float) for k in ("hz", "reference_hz", "from_decay_hz"))
+    assert [nat[d]["reference_hz"] for d in nat] == [0.0080, 0.0324, 0.034]
+    moor = _json(folder, "mooring.json")
+    assert np.asarray(moor["K"]).shape == (6, 6) and len(moor["F0"]) == 6
+    assert moor["dofs"] == ["Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw"]
+    assert "units" in moor and "reference" in moor
+    assert "## Floating offshore wind" in md and "fowt/rao.png" in md
+
+
+def test_natural_frequencies_within_two_percent(section):
+    nat = _json(section[0], "natural_frequencies.json")
+    for dof, entry in nat.items():
+        assert entry["hz"] == pytest.approx(entry["reference_hz"], rel=0.02), dof
+        assert entry["from_decay_hz"] == pytest.approx(entry["reference_hz"], rel=0.02), dof
+        # two routes (eigen-analysis with A(ω_n), time domain with the radiation memory)
+        assert entry["from_decay_hz"] == pytest.approx(entry["hz"], rel=0.01), dof
+        # small offsets: the tabulated nonlinear mooring gives the linearised result
+        assert entry["from_decay_tabulated_mooring_hz"] == pytest.approx(
+            entry["from_decay_hz"], rel=1e-3), dof
+
+
+def test_rao_time_domain_matches_frequency_domain(section):
+    rao = _json(section[0], "rao.json")
+    assert len(rao["points"]) >= 5
+    assert rao["units"] == {"Surge": "m/m", "Heave": "m/m", "Pitch": "rad/m"}
+    for p in rao["points"]:
+        for dof in ("Surge", "Heave", "Pitch"):
+            td, fd = p["time_domain"][dof], p["frequency_domain"][dof]
+            assert td > 0 and td == pytest.approx(fd, rel=0.01), (p["period"], dof)
+
+
+def test_mooring_against_eq_5_3(section):
+    moor = _json(section[0], "mooring.json")
+    k, ref = np.asarray(moor["K"]), CASE["mooring"]["reference"]
+    kr = np.asarray(ref["K"])
+    for i, j in [(0, 0), (2, 2), (4, 4), (0, 4), (1, 1), (3, 3)]:
+        assert k[i, j] == pytest.approx(kr[i, j], rel=0.01), (i, j)
+    assert k[5, 5] == pytest.approx(kr[5, 5] + 9.834e7, rel=0.01)  # lines + the yaw spring
+    assert moor["F0"][2] == pytest.approx(ref["preload"][2], rel=0.005)
+
+
+def test_coefficients_are_the_shipped_ones_without_solving(tmp_path, monkeypatch):
+    monkeypatch.setattr(bem, "_solve_missing", lambda *a, **k: pytest.fail("solved"))
+    ds = fowt.oc3_coefficients(CASE, cache_dir=tmp_path)
+    with xr.open_dataset(bem.PAPER_COEFFS.parent / "bem_oc3_hywind.nc") as ref:
+        assert ds.attrs["input_hash"] == ref.attrs["input_hash"]
+
+
+def test_harmonic_amplitude_recovers_a_phasor():
+    t = np.arange(0.0, 100.0, 0.05)
+    w = 2 * math.pi / 10.0
+    amp = 0.7 * np.exp(0.4j)
+    y = (amp * np.exp(1j * w * t)).real + 0.3
+    assert fowt.harmonic_amplitude(t, y, w) == pytest.approx(amp, rel=1e-12)
+
+
+def test_frequency_response_of_one_dof_oscillator():
+    """1 DOF heave only, synthetic coefficients: X = F / (C + K − ω²(m + A) + iω(B + B_add))."""
+    import synthetic_hydro
+    ds = synthetic_hydro.coefficients()
+    w, k, badd = 5.0, 300.0, 40.0
+    x = fowt.frequency_response(ds, w, np.array([2.0]), np.array([[k]]), np.array([[badd]]),
+                                dofs=["Heave"])
+    b = float(synthetic_hydro.damping(np.array([w]))[0])  # closed form, not the Dataset
+    expect = 2.0 / (synthetic_hydro.C + k - w**2 * (synthetic_hydro.M
+                                                   + synthetic_hydro.added_mass(w))
+                    + 1j * w * (b + badd))
+    assert x[0] == pytest.approx(expect, rel=1e-3)
