@@ -13,8 +13,9 @@ Everything is measured in this process on the same synthetic sphere-like body:
 - hybrid-physics: the NumPy stepper with the network replaced by its exact linear Jacobian,
   to separate the network's cost from the stepper's.
 
-Run: ``python benchmarks/bench_hybrid.py`` (about a minute; the first run also compiles the
-Numba loop, cached afterwards).
+Times are CPU times of this process (best of a few runs). Run: ``python
+benchmarks/bench_hybrid.py`` (about a minute; the first run also compiles the Numba loop,
+~10 s, cached afterwards).
 """
 
 from __future__ import annotations
@@ -40,11 +41,13 @@ DT = 0.02
 
 
 def best_of(fn, n=3) -> float:
+    """Shortest CPU time [s] of ``n`` calls (every part is single-threaded; CPU time is what
+    a shared machine does not inflate, and equals the wall time on an idle one)."""
     times = []
     for _ in range(n):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(time.process_time() - t0)
     return min(times)
 
 
@@ -59,12 +62,13 @@ def main() -> None:
     n_long, n_short = 20000, 2000
     base = (best_of(cum(n_long * DT)) - best_of(cum(n_short * DT))) / (n_long - n_short)
 
-    train = make_histories(co, sh.M, range(2), hs=0.05, tp=0.8, duration=30.0, dt=DT, radiation_ss=ss)
+    train = make_histories(co, sh.M, range(2), hs=0.05, tp=0.8, duration=30.0, dt=DT,
+                           radiation_ss=ss)
     part = partitions(co)["recommended"]
     net = ForceNetwork(inputs=part["inputs"], hidden=(32,), window=11, stride=5, max_epochs=100,
                        lr=3e-3, batch_size=128).fit(train, "F_bb", known=part["known"])
-    cases = make_histories(co, sh.M, range(100, 132), hs=0.05, tp=0.8, duration=n_long * DT, dt=DT,
-                           radiation_ss=ss)
+    cases = make_histories(co, sh.M, range(100, 132), hs=0.05, tp=0.8, duration=n_long * DT,
+                           dt=DT, radiation_ss=ss)
     steps = n_long - net.spec_.span - 1
 
     def hyb(batch, mode="lagged", compiled=None, n_steps=None):
@@ -75,8 +79,10 @@ def main() -> None:
     if fast.HAVE_NUMBA:
         hyb(1, "corrected", True, 100)()  # compile (or load the cache) outside the timing
         for mode in ("lagged", "corrected"):
-            rows.append((f"hybrid {mode:9s} compiled, 1 case  ", best_of(hyb(1, mode), 3) / steps))
-            rows.append((f"hybrid {mode:9s} compiled, 32 cases", best_of(hyb(32, mode), 2) / steps / 32))
+            rows.append((f"hybrid {mode:9s} compiled, 1 case  ",
+                         best_of(hyb(1, mode), 3) / steps))
+            rows.append((f"hybrid {mode:9s} compiled, 32 cases",
+                         best_of(hyb(32, mode), 2) / steps / 32))
     n_np = 4000  # the NumPy stepper is slower: fewer steps
     for mode in ("lagged", "corrected"):
         rows.append((f"hybrid {mode:9s} NumPy,    1 case  ",

@@ -2,11 +2,12 @@
 
 For a body with Cummins coefficients, irregular-sea histories are generated, and for each
 partition a :class:`ForceNetwork` learns the residual, its linearisation predicts the stability
-of the loosely coupled (lagged) hybrid rollout, and the rollout is run on held-out seas:
+of the loosely coupled hybrid rollout (``corrected``: a lagged predictor and a fixed number of
+corrections, :mod:`hybridwsi.surrogate.rollout`), and the rollout is run on held-out seas:
 
 - ``added_mass_to_network``: hydrostatics and excitation known, the network learns
   ``F_rad_inf + F_rad_mem`` from ż, z̈ windows, so it carries the added mass
-  (``alpha_s ≈ -A∞``): lagged coupling fails when ``|alpha_s| / m >= 1`` (docs/THEORY.md §4c);
+  (``alpha_s ≈ -A∞``): loose coupling fails when ``|alpha_s| / m >= 1`` (docs/THEORY.md §4c);
 - ``recommended``: hydrostatics, A∞ and excitation known, the network learns the radiation
   memory ``F_rad_mem`` from a ż window only (``alpha_s = 0`` by construction).
 

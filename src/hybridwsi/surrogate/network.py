@@ -67,7 +67,8 @@ def _check_training_set(histories: Sequence[xr.Dataset], targets: Sequence[np.nd
                          "resample them to one step")
     masses = [(i, m) for i, h in enumerate(histories) if (m := mass_matrix(h)) is not None]
     for i, m in masses[1:]:
-        if m.shape != masses[0][1].shape or not np.allclose(m, masses[0][1], rtol=1e-9, atol=0.0):
+        first = masses[0][1]
+        if m.shape != first.shape or not np.allclose(m, first, rtol=1e-9, atol=0.0):
             raise InputError(f"training history {i} has mass {m.tolist()}, history "
                              f"{masses[0][0]} has {masses[0][1].tolist()}: one body per network")
     for i, y in enumerate(targets):

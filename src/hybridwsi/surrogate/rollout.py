@@ -336,8 +336,8 @@ class _Stepper:
 
 
 def _torch_force(net: ForceNetwork) -> ForceFn:
-    """Fast inference closure on the folded layers (:func:`hybridwsi.surrogate.fast.folded_layers`):
-    NumPy for a few cases per call (a torch call's fixed overhead exceeds the arithmetic),
+    """Fast inference closure on the folded layers (:func:`.fast.folded_layers`): NumPy for
+    a few cases per call (a torch call's fixed overhead exceeds the arithmetic),
     raw ``addmm``/activation torch calls for larger batches."""
     layers = folded_layers(net)
     wts = [torch.from_numpy(w) for w in layers.weights]
@@ -429,8 +429,8 @@ def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarra
     nd, ns, w, nch = spec.n_dof, phys.n_states, spec.span, spec.n_channels
     n_buf = (w - 1) * nch
     dim = 3 * nd + ns + n_buf
-    stepper = _Stepper(phys, spec, dt, mode, lambda x: x @ jac.T, scheme, max_iter=200, tol=1e-13,
-                       corrections=corrections)
+    stepper = _Stepper(phys, spec, dt, mode, lambda x: x @ jac.T, scheme, max_iter=200,
+                       tol=1e-13, corrections=corrections)
 
     def unpack(vec: np.ndarray) -> _State:
         z, v, a = vec[:, :nd], vec[:, nd:2 * nd], vec[:, 2 * nd:3 * nd]
@@ -493,8 +493,8 @@ def check_stability(
 
     x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
     jac = feature_jacobian(net, x).mean(0)
-    rho = float(np.max(np.abs(np.linalg.eigvals(_linear_map(lin_phys, net.spec_, dt, mode, jac, scheme,
-                                                                corrections)))))
+    step_map = _linear_map(lin_phys, net.spec_, dt, mode, jac, scheme, corrections)
+    rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
     lin = linearise(net, refs[0], stride=stride)
     if len(refs) > 1:
         lins = [linearise(net, h, stride=stride) for h in refs]
@@ -655,7 +655,8 @@ def rollout(
                 raise UnstablePartitionError(msg + " (pass force=True / --force to run anyway)")
             warnings.warn("UNSTABLE PARTITION: " + msg, RuntimeWarning, stacklevel=2)
     phys = BatchedPhysics(mass, known, nd)
-    stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol, corrections)
+    stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol,
+                       corrections)
     # initial window from the case histories (lag 0 = sample span-1)
     chans = np.stack([channel_array(h, spec) for h in hs])  # (nc, nt, nch)
     k0 = w - 1
@@ -743,7 +744,7 @@ def _step_loop(stepper: _Stepper, s: _State, t, pre, eta, k0: int, lead: int, n_
 
 
 def _explicit_problem(stepper: _Stepper) -> fast.ExplicitProblem:
-    """The arrays of a lagged/corrected stepper for :func:`hybridwsi.surrogate.fast.run_explicit`."""
+    """The arrays of a lagged/corrected stepper for :func:`.fast.run_explicit`."""
     phys, spec, integ, dt = stepper.phys, stepper.spec, stepper.integrator, stepper.dt
     nd, ns = spec.n_dof, phys.n_states
     p_ss, q_ss, c_out = np.zeros((ns, ns)), np.zeros((ns, nd)), np.zeros((nd, ns))
