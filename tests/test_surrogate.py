@@ -151,3 +151,38 @@ def test_bad_data_raise_input_error(tmp_path):
     (tmp_path / "bad.pt").write_bytes(b"junk")
     with pytest.raises(InputError, match="metadata"):
         ForceNetwork.load(bad)
+
+
+@pytest.mark.parametrize("activation, hidden", [("tanh", (32,)), ("relu", (16, 8)),
+                                                ("silu", (12,)), ("gelu", (8, 8))])
+def test_numpy_forward_equals_torch_forward(activation, hidden):
+    """The folded NumPy network (normalisation inside the end layers) is the torch network."""
+    from hybridwsi.surrogate.fast import folded_layers, numpy_forward
+
+    h = _linear_history(3.0, -2.0, 50.0, n=300)
+    net = ForceNetwork(hidden=hidden, activation=activation, window=3, max_epochs=5,
+                       seed=2).fit(h, "F_lin")
+    x = build_features(h, net.spec_)
+    ref = net.predict_features(x)
+    got = numpy_forward(folded_layers(net), x)
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+
+
+def _with_time_step(h, dt: float):
+    return h.assign_coords(time=np.arange(h.sizes["time"]) * dt)
+
+
+def test_training_set_of_mixed_step_or_mass_or_nan_force_is_refused():
+    a = _linear_history(1.0, 0.5, 10.0, n=100)
+    with pytest.raises(InputError, match="time steps"):
+        ForceNetwork(max_epochs=1).fit([a, _with_time_step(a, 2 * DT)], "F_lin")
+    # a step equal to 1e-12 relative is the same step
+    ForceNetwork(max_epochs=1).fit([a, _with_time_step(a, DT * (1 + 1e-12))], "F_lin")
+    heavy = a.copy()
+    heavy["mass"] = heavy["mass"] * 2.0
+    with pytest.raises(InputError, match="mass"):
+        ForceNetwork(max_epochs=1).fit([a, heavy], "F_lin")
+    nan = a.copy(deep=True)
+    nan["F_lin"][40, 0] = np.nan  # e.g. a file read without validation
+    with pytest.raises(InputError, match="history 1 .*NaN.*row 40"):
+        ForceNetwork(max_epochs=1).fit([a, nan], "F_lin")

@@ -119,10 +119,12 @@ def test_partitions_predicted_vs_observed_light_body(light_body_data):
     rec = rows["recommended"]
     assert rec["alpha_s"] == 0.0 and rec["predicted_stable"] and rec["observed_stable"]
     assert rec["r2_held_out"] > 0.99
-    assert max(rec["held_out_rms_error_z"]) < 0.35  # held-out seas, vs the Cummins reference
+    # held-out seas vs the exact Cummins reference: corrected coupling at dt = 0.02 s is
+    # bounded by Newmark's ~2-3 % (the lagged one was ~15 %)
+    assert max(rec["held_out_rms_error_z"]) < 0.05
     # 1000 peak periods of the recommended partition: no blow-up, no drift
     assert not rec["long_run"]["blew_up"] and rec["long_run"]["drift"] < 0.01
-    assert rec["long_run"]["rms_error_z"] < 0.35
+    assert rec["long_run"]["rms_error_z"] < 0.05
     assert all(r["agree"] for r in rows.values())
 
 
@@ -135,6 +137,18 @@ def test_sphere_added_mass_partition_is_stable_as_predicted():
     row = evaluate_partition("added_mass_to_network", part, train, test, sh.M, net_kw=NET_KW)
     assert row["added_mass_ratio"] < 1.0
     assert row["predicted_stable"] and row["observed_stable"]
+
+
+def test_sphere_demo_rollouts_within_three_percent():
+    """Issue 14: the demo's stable partitions of the sphere-like body roll out held-out seas
+    within 3 % of rms z (corrected coupling, dt = 0.01 s), as predicted stable."""
+    from hybridwsi.surrogate.demo import hybrid_demo
+
+    rep = hybrid_demo(sh.coefficients(), masses={"body": sh.M}, duration=20.0, n_train=2,
+                      n_test=1, long_periods=0)
+    for row in rep["bodies"]["body"]["partitions"]:
+        assert row["predicted_stable"] and row["observed_stable"]
+        assert max(row["held_out_rms_error_z"]) <= 0.03, row["partition"]
 
 
 def test_drift_metric():
@@ -155,3 +169,104 @@ def test_batched_rollout_equals_single_case_rollouts():
         one = rollout(net, [c], mass=M, known=[Hydrostatic(C)], mode="implicit")
         np.testing.assert_allclose(both.histories[i]["z"].values, one.histories[0]["z"].values,
                                    rtol=1e-7, atol=1e-12)
+
+
+def _exact_decay(b: float, z0: float, t: np.ndarray) -> np.ndarray:
+    """z(t) of m z'' + b z' + C z = 0 from rest at z0 (underdamped)."""
+    wn, zeta = np.sqrt(C / M), b / (2 * np.sqrt(C * M))
+    wd = wn * np.sqrt(1 - zeta**2)
+    return z0 * np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))
+
+
+def _decay_error(mode: str, dt: float, b: float = 4.0, z0: float = 0.01) -> float:
+    case = _decay_case(z0, dt, 3.0)
+    net = _linear_net(0.0, -b, 0.0, case)
+    res = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode=mode, check=False)
+    h = res.histories[0]
+    return float(np.max(np.abs(h["z"].values[:, 0] - _exact_decay(b, z0, h["time"].values))) / z0)
+
+
+def test_corrected_coupling_is_second_order_and_lagged_first_order():
+    """Damping network in the loop: the one-step lag of the lagged coupling is a first-order
+    error; re-evaluating the network on the predicted end-of-step state restores Newmark's
+    second order (against the analytic decay)."""
+    lag = [_decay_error("lagged", dt) for dt in (0.004, 0.002)]
+    cor = [_decay_error("corrected", dt) for dt in (0.004, 0.002)]
+    assert 1.7 < lag[0] / lag[1] < 2.3
+    assert 3.4 < cor[0] / cor[1] < 4.6
+    assert cor[1] < 0.1 * lag[1]
+
+
+@pytest.mark.parametrize("alpha", [-0.3 * M, -1.5 * M])
+def test_corrected_coupling_keeps_the_added_mass_threshold(alpha):
+    """Each correction multiplies the lagged inertia error by alpha_s/(m + A_k): the threshold
+    stays at |alpha_s| = m + A_k (spectral radius ~ ratio^(k+1) above it) and, below it, an
+    odd number of corrections turns the lag's numerical damping negative (an undamped body is
+    then weakly unstable), an even number keeps it positive."""
+    dt = 0.01
+    case = _decay_case(0.01, dt, 2.0)
+    net = _linear_net(alpha, 0.0, 0.0, case)
+    ratio = abs(alpha) / M
+    for k in (1, 2, 3, 4):
+        pred = check_stability(net, case, mass=M, known=[Hydrostatic(C)], dt=dt,
+                               mode="corrected", corrections=k)
+        if ratio > 1:
+            assert pred.spectral_radius == pytest.approx(ratio ** (k + 1), rel=0.02)
+        elif k % 2:
+            assert 1.0 + 1e-5 < pred.spectral_radius < 1.001
+        else:
+            assert pred.stable
+        res = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="corrected",
+                      corrections=k, force=True, check=False)
+        assert res.blew_up[0] == (ratio > 1)
+
+
+def test_many_corrections_converge_to_the_implicit_coupling():
+    """Corrections are fixed-point iterations of the implicit coupling (contraction 0.3)."""
+    dt = 0.005
+    case = _decay_case(0.01, dt, 1.0)
+    net = _linear_net(-0.3 * M, -2.0, 30.0, case)
+    imp = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="implicit", tol=1e-14,
+                  max_iter=200)
+    cor = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="corrected",
+                  corrections=40)
+    np.testing.assert_allclose(cor.histories[0]["z"].values, imp.histories[0]["z"].values,
+                               rtol=0, atol=1e-12)
+
+
+def test_corrections_for_follows_the_added_mass_ratio():
+    from hybridwsi.surrogate.rollout import corrections_for
+
+    assert corrections_for(0.0) == 1
+    assert corrections_for(0.5) == 8  # 0.5^7 = 0.008 <= 1 %, rounded up to even
+    assert corrections_for(0.31) == 4  # 0.31^4 = 0.009
+    assert corrections_for(0.05) == 2
+    assert corrections_for(1.2) == 2
+    assert corrections_for(0.999) == 8  # capped
+
+
+@pytest.mark.skipif(not pytest.importorskip("hybridwsi.surrogate.fast").HAVE_NUMBA,
+                    reason="Numba not installed")
+@pytest.mark.parametrize("mode, scheme", [("lagged", "newmark"), ("corrected", "newmark"),
+                                          ("lagged", "semi_implicit_euler")])
+def test_compiled_loop_equals_numpy_stepper(mode, scheme):
+    """Radiation memory states, quadratic damping, a wave-elevation input and two cases: the
+    compiled loop runs the NumPy stepper's arithmetic (to rounding)."""
+    from hybridwsi.forces import QuadraticDamping
+    from hybridwsi.forces.radiation import RadiationMemory
+
+    co = sh.coefficients()
+    hs = make_histories(co, sh.M, [5, 6], hs=0.05, tp=0.8, duration=6.0, dt=0.02)
+    part = partitions(co)["recommended"]
+    known = [*part["known"], QuadraticDamping(3.0), RadiationMemory.from_history(hs[0])]
+    net = ForceNetwork(inputs=("z", "zdot", "eta"), hidden=(8,), window=4, stride=2, lead=2,
+                       max_epochs=3).fit(hs, lambda h: 0.1 * h["F_exc"].values)
+    kw = {"mass": sh.M, "known": known, "mode": mode, "scheme": scheme, "check": False}
+    a = rollout(net, hs, compiled=True, **kw)
+    b = rollout(net, hs, compiled=False, **kw)
+    for ha, hb in zip(a.histories, b.histories):
+        for var in ("z", "zdot", "zddot", "F_net"):
+            ref = hb[var].values
+            np.testing.assert_allclose(ha[var].values, ref, rtol=0,
+                                       atol=1e-12 * np.nanmax(np.abs(ref)))
+    np.testing.assert_array_equal(a.iterations, b.iterations)

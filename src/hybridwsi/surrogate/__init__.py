@@ -4,7 +4,9 @@ in the loop. Modules import torch lazily through :mod:`~hybridwsi.surrogate.netw
 - :mod:`~hybridwsi.surrogate.features` — window features of kinematics and wave elevation;
 - :mod:`~hybridwsi.surrogate.network` — :class:`ForceNetwork` (fit/predict/save/load);
 - :mod:`~hybridwsi.surrogate.linearise` — alpha_s, beta_s, gamma_s by autograd;
-- :mod:`~hybridwsi.surrogate.rollout` — batched hybrid rollout (lagged/implicit) with the
-  stability check before running;
+- :mod:`~hybridwsi.surrogate.rollout` — batched hybrid rollout (lagged/corrected/implicit)
+  with the stability check before running;
+- :mod:`~hybridwsi.surrogate.fast` — folded NumPy network and the compiled (Numba) loop of
+  the lagged/corrected rollout;
 - :mod:`~hybridwsi.surrogate.demo` — which partition may a network take over (issue 6).
 """

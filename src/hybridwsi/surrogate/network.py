@@ -22,7 +22,7 @@ import xarray as xr
 from hybridwsi.forces import KnownComponent, black_box_force
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError
-from hybridwsi.history import atomic_write
+from hybridwsi.history import atomic_write, mass_matrix, time_step
 from hybridwsi.surrogate.features import FeatureSpec, build_features, spec_for
 
 try:  # torch is the optional "ml" extra
@@ -41,8 +41,6 @@ def _require_torch() -> None:
         raise InputError("the force network needs PyTorch: pip install 'hybridwsi[ml]'")
 
 
-
-
 def build_mlp(n_in: int, n_out: int, hidden: Sequence[int], activation: str) -> Any:
     """``Linear -> act -> ... -> Linear`` (float64 so Jacobians match the numpy solver)."""
     _require_torch()
@@ -54,6 +52,27 @@ def build_mlp(n_in: int, n_out: int, hidden: Sequence[int], activation: str) -> 
         width = int(h)
     layers.append(nn.Linear(width, n_out))
     return nn.Sequential(*layers).double()
+
+
+def _check_training_set(histories: Sequence[xr.Dataset], targets: Sequence[np.ndarray]) -> None:
+    """Refuse a training set the network cannot learn one force law from.
+
+    All histories must share the time step (within 1e-9 relative: the window taps are time
+    lags in samples) and the rigid-body mass (the residual force depends on it), and every
+    target force [N] must be finite (one NaN turns the loss, and R², into NaN).
+    """
+    dts = [time_step(h) for h in histories]
+    if any(abs(d - dts[0]) > 1e-9 * abs(dts[0]) for d in dts):
+        raise InputError(f"training histories have different time steps {sorted(set(dts))} s; "
+                         "resample them to one step")
+    masses = [(i, m) for i, h in enumerate(histories) if (m := mass_matrix(h)) is not None]
+    for i, m in masses[1:]:
+        first = masses[0][1]
+        if m.shape != first.shape or not np.allclose(m, first, rtol=1e-9, atol=0.0):
+            raise InputError(f"training history {i} has mass {m.tolist()}, history "
+                             f"{masses[0][0]} has {masses[0][1].tolist()}: one body per network")
+    for i, y in enumerate(targets):
+        _check_finite(y, f"target force of training history {i}")
 
 
 def _as_list(histories: xr.Dataset | Sequence[xr.Dataset]) -> list[xr.Dataset]:
@@ -75,7 +94,16 @@ def target_force(
     ``"F_bb"`` (unless the history has a variable of that name) means ``force`` minus the
     ``known`` components (paper Eq. 3); another string names a force variable; a callable is
     called with the history; an array (or a list of arrays, one per history) is used as is.
+    NaN/inf values raise :class:`~hybridwsi.errors.InputError`.
     """
+    y = _raw_target(hist, target, known, force, index)
+    _check_finite(y, "target force")
+    return y
+
+
+def _raw_target(hist: xr.Dataset, target: Target, known: Sequence[KnownComponent], force: str,
+                index: int) -> np.ndarray:
+    """:func:`target_force` without the finiteness check, shape (n_time, n_dof) [N]."""
     if isinstance(target, str):
         if target == "F_bb" and "F_bb" not in hist:
             return black_box_force(hist, force, list(known))
@@ -91,9 +119,15 @@ def target_force(
     if y.shape != (hist.sizes["time"], hist.sizes["dof"]):
         raise InputError(f"target has shape {y.shape}; expected (n_time, n_dof) = "
                          f"({hist.sizes['time']}, {hist.sizes['dof']})")
-    if not np.all(np.isfinite(y)):
-        raise InputError("target force contains NaN/inf values")
     return y
+
+
+def _check_finite(y: np.ndarray, what: str) -> None:
+    """Raise InputError naming the first row of ``y`` (n_time, n_dof) that is NaN/inf."""
+    bad = ~np.isfinite(y)
+    if bad.any():
+        raise InputError(f"{what} has {int(bad.sum())} NaN/inf value(s), first at row "
+                         f"{int(np.argwhere(bad)[0][0])}")
 
 
 class ForceNetwork:
@@ -186,9 +220,11 @@ class ForceNetwork:
     # -- data ---------------------------------------------------------------------------
     def _dataset(self, hs: list[xr.Dataset], target: Target, known, force: str):
         xs_tr, ys_tr, xs_va, ys_va = [], [], [], []
-        for i, h in enumerate(hs):
+        targets = [_raw_target(h, target, known, force, i) for i, h in enumerate(hs)]
+        _check_training_set(hs, targets)
+        for h, y_all in zip(hs, targets):
             x = build_features(h, self.spec_)
-            y = target_force(h, target, known, force, i)[self.spec_.rows(h.sizes["time"])]
+            y = y_all[self.spec_.rows(h.sizes["time"])]
             n_va = round(self.val_fraction * len(x))
             cut = len(x) - n_va
             xs_tr.append(x[:cut]), ys_tr.append(y[:cut])

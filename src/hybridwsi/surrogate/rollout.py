@@ -12,9 +12,21 @@ Time stepping: Newmark average acceleration (trapezoidal in z, ż, and in the in
 ``x``), with the new acceleration found by fixed-point iteration with Aitken relaxation.
 
 - ``mode="lagged"`` (loosely coupled): the network sees the kinematics of the previous step,
-  ``F_net^{n+1} = N(x^n)``; only the known physics is iterated.
+  ``F_net^{n+1} = N(x^n)``; only the known physics is iterated. The one-step delay of the
+  network force is a first-order error (for a radiation-memory network ~10 % of rms z at
+  dt = 0.02 s on the sphere demo, whatever the network's accuracy).
+- ``mode="corrected"`` (loosely coupled with ``corrections`` predictor-corrector passes): the
+  lagged step predicts the end-of-step state, the network (and the known explicit forces)
+  are evaluated again on it and the step is redone, a fixed number of times. Second order
+  like Newmark; each pass multiplies the inertia coupling error by ``alpha_s/(m + A_k)``, so
+  the added-mass threshold ``|alpha_s| < m + A_k`` is that of the lagged mode, and an even
+  number of passes keeps the remaining lag dissipative (:func:`corrections_for`).
 - ``mode="implicit"``: the network sees the current step, ``F_net^{n+1} = N(x^{n+1})``, and
   is re-evaluated inside the fixed point (it converges only while ``|alpha_s| < m + A_k``).
+
+``lagged`` and ``corrected`` rollouts with the usual known components run in one compiled loop
+(:mod:`hybridwsi.surrogate.fast`, when Numba is installed; ``compiled=False`` forces the NumPy
+stepper, which the stability map always uses).
 
 Before rolling out, :func:`check_stability` linearises the network (autograd) and computes the
 spectral radius of the *same* step map with the network replaced by its Jacobian (all feature
@@ -46,11 +58,13 @@ from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.integrators import LaggedIntegrator, check_scheme
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import make_history, time_step
+from hybridwsi.surrogate import fast
+from hybridwsi.surrogate.fast import folded_layers, numpy_forward
 from hybridwsi.surrogate.features import channel_array
 from hybridwsi.surrogate.linearise import feature_jacobian, linearise
 from hybridwsi.surrogate.network import ForceNetwork, torch
 
-MODES = ("lagged", "implicit")
+MODES = ("lagged", "corrected", "implicit")
 #: network evaluations of at most this many cases run in NumPy (per-call torch overhead)
 _NUMPY_MAX_BATCH = 8
 #: |z| beyond this many times the reference amplitude (or non-finite) counts as blown up
@@ -210,9 +224,13 @@ class _Stepper:
     """
 
     def __init__(self, phys: BatchedPhysics, spec, dt: float, mode: str, net_force: ForceFn,
-                 scheme: str = "newmark", max_iter: int = 50, tol: float = 1e-9) -> None:
+                 scheme: str = "newmark", max_iter: int = 50, tol: float = 1e-9,
+                 corrections: int = 1) -> None:
         if mode not in MODES:
             raise InputError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
+        if mode == "corrected" and (scheme != "newmark" or int(corrections) < 1):
+            raise InputError("mode 'corrected' needs scheme 'newmark' and corrections >= 1")
+        self.corrections = int(corrections) if mode == "corrected" else 0
         self.phys, self.spec, self.dt, self.mode = phys, spec, float(dt), mode
         self.scheme = check_scheme(scheme)
         self.net_force, self.max_iter, self.tol = net_force, int(max_iter), float(tol)
@@ -223,7 +241,7 @@ class _Stepper:
         self.iterations: list[int] = []
         # lagged mode: the implicit solve of lagged_step factorised once for the whole run
         self.integrator = LaggedIntegrator(self.scheme, self.dt, phys.m_eff, phys.b_lin,
-                                           phys.c_lin) if mode == "lagged" else None
+                                           phys.c_lin) if mode != "implicit" else None
         self._remainder = phys.has_remainder
         self._has_eta = "eta" in spec.inputs and spec.n_probe > 0
 
@@ -262,24 +280,28 @@ class _Stepper:
         return x1
 
     def step(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
-        if self.mode == "lagged":
-            return self._lagged(s, t1, f_pre, eta1)
-        return self._implicit(s, t1, f_pre, eta1)
+        if self.mode == "implicit":
+            return self._implicit(s, t1, f_pre, eta1)
+        return self._lagged(s, t1, f_pre, eta1)
 
     def _lagged(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
         phys, t0 = self.phys, t1 - self.dt
-        f_net = self.net_force(self.feat(s.buf))
+        g0 = phys.state_derivative(t0, s.z, s.v, s.x) if phys.n_states else None
         # explicit part on the start-of-step state; the prescribed force is a known function
         # of time, so it is taken at the end of the step (no coupling lag to analyse)
-        f_x = f_net + f_pre
-        if self._remainder:  # otherwise exactly zero
-            f_x = f_x + phys.explicit_force(t0, s.z, s.v, s.x)
-        z1, v1, a1 = self.integrator.step(s.z.T, s.v.T, s.a.T, f_x.T)
-        z1, v1, a1 = z1.T, v1.T, a1.T
-        g0 = phys.state_derivative(t0, s.z, s.v, s.x) if phys.n_states else None
-        x1 = self._states(s, t0, v1, z1, g0)
-        self.iterations.append(1)
-        return _State(z1, v1, a1, x1, self.shifted(s.buf, self.row(z1, v1, a1, eta1)))
+        t_x, z_x, v_x, x_x, buf = t0, s.z, s.v, s.x, s.buf
+        for _ in range(1 + self.corrections):
+            f_x = self.net_force(self.feat(buf)) + f_pre
+            if self._remainder:  # otherwise exactly zero
+                f_x = f_x + phys.explicit_force(t_x, z_x, v_x, x_x)
+            z1, v1, a1 = self.integrator.step(s.z.T, s.v.T, s.a.T, f_x.T)
+            z1, v1, a1 = z1.T, v1.T, a1.T
+            x1 = self._states(s, t0, v1, z1, g0)
+            buf = self.shifted(s.buf, self.row(z1, v1, a1, eta1))
+            # corrected: the explicit forces again, on the predicted end-of-step state
+            t_x, z_x, v_x, x_x = t1, z1, v1, x1
+        self.iterations.append(1 + self.corrections)
+        return _State(z1, v1, a1, x1, buf)
 
     def _implicit(self, s: _State, t1: float, f_pre: np.ndarray, eta1: np.ndarray) -> _State:
         dt, m_inv, phys = self.dt, self.phys.m_inv, self.phys
@@ -314,44 +336,46 @@ class _Stepper:
 
 
 def _torch_force(net: ForceNetwork) -> ForceFn:
-    """Fast inference closure: normalisation folded into the first/last layer, raw
-    ``addmm``/activation calls (tiny networks are dominated by per-call overhead)."""
-    layers = [mod for mod in net.model_ if isinstance(mod, torch.nn.Linear)]
-    acts = [mod for mod in net.model_ if not isinstance(mod, torch.nn.Linear)]
-    with torch.no_grad():
-        ws = [lin.weight.detach().clone() for lin in layers]
-        bs = [lin.bias.detach().clone() for lin in layers]
-        # x_n = (x - m)/s  ->  W x_n + b = (W/s) x + (b - W m/s)
-        bs[0] = bs[0] - ws[0] @ (net._xm / net._xs)
-        ws[0] = ws[0] / net._xs
-        # y = y_n * ys + ym
-        ws[-1] = ws[-1] * net._ys[:, None]
-        bs[-1] = bs[-1] * net._ys + net._ym
-        wts = [w.T.contiguous() for w in ws]
-    act = type(acts[0]) if acts else None
-    fn = {torch.nn.Tanh: torch.tanh, torch.nn.ReLU: torch.relu}.get(act)
-    # the same folded layers as NumPy arrays: for a few cases per call a torch call's fixed
-    # overhead (tensor wrapping, dispatch, inference-mode context) exceeds the arithmetic
-    np_fn = {torch.nn.Tanh: np.tanh, torch.nn.ReLU: lambda h: np.maximum(h, 0.0)}.get(act)
-    use_np = np_fn is not None and all(w.device.type == "cpu" for w in wts)
-    if use_np:
-        np_wts = [w.numpy() for w in wts]
-        np_bs = [b.numpy() for b in bs]
+    """Fast inference closure on the folded layers (:func:`.fast.folded_layers`): NumPy for
+    a few cases per call (a torch call's fixed overhead exceeds the arithmetic),
+    raw ``addmm``/activation torch calls for larger batches."""
+    layers = folded_layers(net)
+    wts = [torch.from_numpy(w) for w in layers.weights]
+    bs = [torch.from_numpy(b) for b in layers.biases]
+    act = {"tanh": torch.tanh, "relu": torch.relu, "silu": torch.nn.functional.silu,
+           "gelu": torch.nn.functional.gelu}[layers.activation]
 
     def f(x: np.ndarray) -> np.ndarray:
-        if use_np and len(x) <= _NUMPY_MAX_BATCH:
-            h = x @ np_wts[0] + np_bs[0]
-            for w, b in zip(np_wts[1:], np_bs[1:]):
-                h = np_fn(h) @ w + b
-            return h
+        if len(x) <= _NUMPY_MAX_BATCH:
+            return numpy_forward(layers, x)
         with torch.inference_mode():
             h = torch.from_numpy(np.ascontiguousarray(x))
             for k, (w, b) in enumerate(zip(wts, bs)):
                 h = torch.addmm(b, h, w)
                 if k < len(wts) - 1:
-                    h = fn(h) if fn is not None else acts[k](h)
+                    h = act(h)
             return h.numpy()
     return f
+
+
+def corrections_for(ratio: float, reduction: float = 0.01, max_corrections: int = 8) -> int:
+    """Corrections of the ``corrected`` coupling for a network with added-mass ratio ``ratio``.
+
+    Each correction re-evaluates the network on the end-of-step state just predicted, which
+    multiplies the acceleration error of the previous pass by ``alpha_s / (m + A_k)``
+    (docs/THEORY.md §4c). The lagged pass's error acts as a damping (for ``alpha_s < 0``, the
+    usual added mass), so an odd number of corrections leaves a *negative* damping of
+    ``ratio^k`` times it (unstable without physical damping) and an even number a positive
+    one. Hence: 1 when the network has no inertia part (``ratio = 0``), else the smallest
+    even ``k`` with ``ratio^k <= reduction``, at most ``max_corrections``. A ratio >= 1
+    diverges whatever k (2 returned; the stability check says so).
+    """
+    if ratio <= 0.0:
+        return 1
+    if ratio >= 1.0:
+        return 2
+    k = int(np.ceil(np.log(reduction) / np.log(ratio) - 1e-9))
+    return int(min(max_corrections, max(2, k + k % 2)))
 
 
 # ------------------------------------------------------------------- stability prediction
@@ -399,13 +423,14 @@ class StabilityPrediction:
 
 
 def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarray,
-                scheme: str = "newmark") -> np.ndarray:
+                scheme: str = "newmark", corrections: int = 1) -> np.ndarray:
     """Matrix of the one-step map on (z, v, a, x, buffer lags 0..w-2) for a linear network
     ``F = jac @ features`` (eta channels carry no state: they are inputs)."""
     nd, ns, w, nch = spec.n_dof, phys.n_states, spec.span, spec.n_channels
     n_buf = (w - 1) * nch
     dim = 3 * nd + ns + n_buf
-    stepper = _Stepper(phys, spec, dt, mode, lambda x: x @ jac.T, scheme, max_iter=200, tol=1e-13)
+    stepper = _Stepper(phys, spec, dt, mode, lambda x: x @ jac.T, scheme, max_iter=200,
+                       tol=1e-13, corrections=corrections)
 
     def unpack(vec: np.ndarray) -> _State:
         z, v, a = vec[:, :nd], vec[:, nd:2 * nd], vec[:, 2 * nd:3 * nd]
@@ -433,6 +458,7 @@ def check_stability(
     scheme: str = "newmark",
     tol: float = 1e-6,
     stride: int = 5,
+    corrections: int = 1,
 ) -> StabilityPrediction:
     """Predict whether the hybrid rollout is stable, from the network's linearisation.
 
@@ -448,11 +474,15 @@ def check_stability(
         The partition's known components.
     dt : float, optional
         Time step [s] (default: the reference's).
-    mode : {"lagged", "implicit"}
+    mode : {"lagged", "corrected", "implicit"}
     scheme : {"newmark", "semi_implicit_euler"}
         Integrator of the lagged mode (:mod:`hybridwsi.diagnostic.integrators`).
     tol : float
         Margin on the spectral radius.
+    stride : int
+        Every ``stride``-th reference sample is a linearisation state.
+    corrections : int
+        Predictor-corrector passes of the ``corrected`` mode.
     """
     refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
     dt = float(dt if dt is not None else time_step(refs[0]))
@@ -463,7 +493,8 @@ def check_stability(
 
     x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
     jac = feature_jacobian(net, x).mean(0)
-    rho = float(np.max(np.abs(np.linalg.eigvals(_linear_map(lin_phys, net.spec_, dt, mode, jac, scheme)))))
+    step_map = _linear_map(lin_phys, net.spec_, dt, mode, jac, scheme, corrections)
+    rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
     lin = linearise(net, refs[0], stride=stride)
     if len(refs) > 1:
         lins = [linearise(net, h, stride=stride) for h in refs]
@@ -472,7 +503,7 @@ def check_stability(
     a_k, b_k, c_k = summed_linear_coefficients(list(known), nd)
     m = as_matrix(mass, nd, "mass")
     ratio = stability.added_mass_ratio(m, a_k, lin.alpha)
-    stable = rho <= 1.0 + tol and (mode == "lagged" or ratio < 1.0)
+    stable = rho <= 1.0 + tol and (mode != "implicit" or ratio < 1.0)
     # docs/THEORY.md §4b-c for the network's lag-0 sensitivities: (b) is the continuous test
     cont = stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)
     lagged = stability.loosely_coupled_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta,
@@ -556,6 +587,8 @@ def rollout(
     reference_for_check: xr.Dataset | Sequence[xr.Dataset] | None = None,
     max_iter: int = 50,
     tol: float = 1e-9,
+    corrections: int = 1,
+    compiled: bool | None = None,
     progress: bool = False,
 ) -> RolloutResult:
     """Integrate the hybrid model for a batch of cases.
@@ -574,8 +607,9 @@ def rollout(
         Rigid-body mass [kg].
     known : sequence of KnownComponent
         Known components in the ODE (hydrostatics, A∞, radiation memory ...).
-    mode : {"lagged", "implicit"}
-        Network sees the previous (loosely coupled) or the current step.
+    mode : {"lagged", "corrected", "implicit"}
+        Network sees the previous step (loosely coupled), the predicted end of the step
+        (``corrections`` times), or the current step (fixed point).
     scheme : {"newmark", "semi_implicit_euler"}
         Lagged-mode integrator (:func:`hybridwsi.diagnostic.integrators.lagged_step`).
     prescribed : str or array, optional
@@ -589,11 +623,16 @@ def rollout(
         States for the linearisation (default: the cases).
     max_iter, tol : int, float
         Fixed-point settings per step.
+    corrections : int
+        Predictor-corrector passes per step of the ``corrected`` mode (see
+        :func:`corrections_for`).
+    compiled : bool, optional
+        Run ``lagged``/``corrected`` in the compiled loop of :mod:`hybridwsi.surrogate.fast`
+        (default: whenever it supports the case; there a diverged case is NaN after the step
+        its divergence was seen). False forces the NumPy stepper.
     progress : bool
-        tqdm progress bar over steps.
+        tqdm progress bar over steps (NumPy stepper only).
     """
-    from tqdm.auto import tqdm
-
     net._check_fitted()
     hs = [cases] if isinstance(cases, xr.Dataset) else list(cases)
     spec, nd, w, lead = net.spec_, net.n_dof_, net.spec_.span, net.spec_.lead
@@ -607,7 +646,7 @@ def rollout(
     prediction = None
     if check:
         prediction = check_stability(net, hs if reference_for_check is None else reference_for_check, mass=mass, known=known,
-                                     dt=dt, mode=mode, scheme=scheme)
+                                     dt=dt, mode=mode, scheme=scheme, corrections=corrections)
         if not prediction.stable:
             msg = (f"hybrid {mode} rollout predicted unstable: spectral radius "
                    f"{prediction.spectral_radius:.4f} > 1, |alpha_s|/(m+A_k) = "
@@ -616,7 +655,8 @@ def rollout(
                 raise UnstablePartitionError(msg + " (pass force=True / --force to run anyway)")
             warnings.warn("UNSTABLE PARTITION: " + msg, RuntimeWarning, stacklevel=2)
     phys = BatchedPhysics(mass, known, nd)
-    stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol)
+    stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol,
+                       corrections)
     # initial window from the case histories (lag 0 = sample span-1)
     chans = np.stack([channel_array(h, spec) for h in hs])  # (nc, nt, nch)
     k0 = w - 1
@@ -635,22 +675,19 @@ def rollout(
     f_phys = phys.force(t[k0], s.z, s.v, s.x)
     fknown[:, 0], fnet[:, 0] = f_phys - s.a @ a_k.T, s.a @ phys.m_eff.T - f_phys - pre[:, k0]
     ref_amp = np.maximum(np.max(np.abs(kin["z"]), axis=(1, 2)), 1e-12)
-    blew = np.zeros(nc, bool)
-    n_done = n_steps
     xs = np.empty((nc, n_steps + 1, phys.n_states))
     xs[:, 0] = s.x
-    for n in tqdm(range(n_steps), disable=not progress, desc=f"hybrid {mode}", unit="step"):
-        k1 = k0 + n + 1
-        s = stepper.step(s, t[k1], pre[:, k1], eta[:, k1 + lead])
-        zs[:, n + 1], vs[:, n + 1], as_[:, n + 1], xs[:, n + 1] = s.z, s.v, s.a, s.x
-        if n % 50 == 49 or n == n_steps - 1:  # cheap divergence watch
-            zmax = np.max(np.abs(zs[:, n - min(n, 49):n + 2]), axis=(1, 2))
-            blew |= ~np.isfinite(zmax) | (zmax > BLOWUP_FACTOR * ref_amp)
-            if blew.all():  # every case diverged: stop early, pad with NaN
-                n_done = n + 1
-                zs[:, n + 2:], vs[:, n + 2:], as_[:, n + 2:] = np.nan, np.nan, np.nan
-                xs[:, n + 2:] = np.nan
-                break
+    use_compiled = fast.supported(net.activation, phys.other, mode, scheme) if compiled is None \
+        else bool(compiled)
+    if use_compiled:  # the same step map in one compiled loop
+        zs, vs, as_, xs, blew, n_done = fast.run_explicit(
+            _explicit_problem(stepper), folded_layers(net), s.z, s.v, s.a, s.x, s.buf, pre, eta,
+            k0, lead, n_steps, ref_amp, BLOWUP_FACTOR)
+        iterations = np.full(n_done, 1 + stepper.corrections)
+    else:
+        blew, n_done = _step_loop(stepper, s, t, pre, eta, k0, lead, n_steps, ref_amp,
+                                  (zs, vs, as_, xs), progress)
+        iterations = np.asarray(stepper.iterations)
     # forces on the trajectory, after the loop
     if not phys.other:  # no explicit t dependence: all cases and steps in one evaluation
         rows = nc * n_steps
@@ -680,7 +717,54 @@ def rollout(
                                         "known": [c.describe() for c in known],
                                         "network": net.spec_.to_dict()},
                                 check=False))
-    return RolloutResult(out, blew, prediction, np.asarray(stepper.iterations), saw)
+    return RolloutResult(out, blew, prediction, iterations, saw)
+
+
+def _step_loop(stepper: _Stepper, s: _State, t, pre, eta, k0: int, lead: int, n_steps: int,
+               ref_amp: np.ndarray, out: tuple, progress: bool) -> tuple[np.ndarray, int]:
+    """The NumPy time loop: fills ``out = (zs, vs, as_, xs)`` in place; returns the per-case
+    divergence flags and the number of steps done (NaN after when every case diverged)."""
+    from tqdm.auto import tqdm
+
+    zs, vs, as_, xs = out
+    blew = np.zeros(len(ref_amp), bool)
+    for n in tqdm(range(n_steps), disable=not progress, desc=f"hybrid {stepper.mode}",
+                  unit="step"):
+        k1 = k0 + n + 1
+        s = stepper.step(s, t[k1], pre[:, k1], eta[:, k1 + lead])
+        zs[:, n + 1], vs[:, n + 1], as_[:, n + 1], xs[:, n + 1] = s.z, s.v, s.a, s.x
+        if n % 50 == 49 or n == n_steps - 1:  # cheap divergence watch
+            zmax = np.max(np.abs(zs[:, n - min(n, 49):n + 2]), axis=(1, 2))
+            blew |= ~np.isfinite(zmax) | (zmax > BLOWUP_FACTOR * ref_amp)
+            if blew.all():  # every case diverged: stop early, pad with NaN
+                zs[:, n + 2:], vs[:, n + 2:], as_[:, n + 2:] = np.nan, np.nan, np.nan
+                xs[:, n + 2:] = np.nan
+                return blew, n + 1
+    return blew, n_steps
+
+
+def _explicit_problem(stepper: _Stepper) -> fast.ExplicitProblem:
+    """The arrays of a lagged/corrected stepper for :func:`.fast.run_explicit`."""
+    phys, spec, integ, dt = stepper.phys, stepper.spec, stepper.integrator, stepper.dt
+    nd, ns = spec.n_dof, phys.n_states
+    p_ss, q_ss, c_out = np.zeros((ns, ns)), np.zeros((ns, nd)), np.zeros((nd, ns))
+    for (sl, lhs_inv, rhs, b), (_, _, _, c) in zip(phys.ss_trapezoid(dt), phys.ss):
+        # trapezoidal rule solved for x1: x1 = P x + Q (v + v1)
+        p_ss[sl, sl], q_ss[sl], c_out[:, sl] = lhs_inv @ rhs, 0.5 * dt * lhs_inv @ b, c
+    pos = np.full((3, nd), -1, dtype=np.int64)
+    for i, name in enumerate(("z", "zdot", "zddot")):
+        if name in spec.inputs:
+            pos[i] = [spec.channels.index((name, k)) for k in range(nd)]
+    eta_pos = np.array([spec.channels.index(("eta", k)) for k in range(spec.n_probe)]
+                       if stepper._has_eta else [], dtype=np.int64)
+    return fast.ExplicitProblem(
+        scheme=0 if stepper.scheme == "newmark" else 1, lhs_inv=integ._lhs_inv,
+        damping=np.ascontiguousarray(phys.b_lin), stiffness=np.ascontiguousarray(phys.c_lin),
+        # LaggedIntegrator's factorised solve and step coefficients (one definition of the step)
+        coef=np.array([dt] + [getattr(integ, k, 0.0) for k in ("_c_v", "_c_z", "_c_z1", "_c_v1")]),
+        quad=np.ascontiguousarray(phys.quad),
+        p_ss=p_ss, q_ss=q_ss, c_out=c_out, chan_pos=pos, eta_pos=eta_pos, window=spec.window,
+        stride=spec.stride, corrections=stepper.corrections)
 
 
 def _initial_states(phys: BatchedPhysics, known, hs, k0: int) -> np.ndarray:
