@@ -30,8 +30,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--partition", default="recommended",
                    choices=["recommended", "added_mass_to_network"],
                    help="force partition whose residual the network learns (default recommended)")
-    p.add_argument("--mode", default="lagged", choices=["lagged", "implicit"],
-                   help="coupling of the network force in the rollout (default lagged)")
+    p.add_argument("--mode", default="lagged", choices=["lagged", "corrected", "implicit"],
+                   help="coupling of the network in the time step: lagged (explicit, previous "
+                        "step's kinematics), corrected (lagged then re-evaluated at the predicted "
+                        "end of step, --corrections times) or implicit (iterated to convergence)")
+    p.add_argument("--corrections", type=o.positive_int, default=None, metavar="K",
+                   help="with --mode corrected: re-evaluations per step (default: the fewest "
+                        "even number that cuts the added-mass error to 1 %%, from the network's "
+                        "predicted added-mass ratio)")
     p.add_argument("--test-fraction", type=o.fraction, default=0.2,
                    help="fraction of the cases held out for testing, the last ones (default 0.2)")
     p.add_argument("--max-cases", type=o.positive_int, default=20,
@@ -108,7 +114,12 @@ def run(args: argparse.Namespace) -> int:
     from hybridwsi.hydro.formats import read_coefficients
     from hybridwsi.surrogate.demo import partitions
     from hybridwsi.surrogate.network import ForceNetwork
-    from hybridwsi.surrogate.rollout import UnstablePartitionError, rollout
+    from hybridwsi.surrogate.rollout import (
+        UnstablePartitionError,
+        check_stability,
+        corrections_for,
+        rollout,
+    )
 
     torch.set_num_threads(1)
     check_output_path(args.out, [*args.data, args.coeffs], kind="dir", products=PRODUCTS)
@@ -141,8 +152,12 @@ def run(args: argparse.Namespace) -> int:
                        batch_size=args.batch_size, seed=args.train_seed,
                        ).fit(train, "F_bb", known=part["known"], progress=not args.quiet)
     try:
+        n_corr = 1
+        if args.mode == "corrected":
+            n_corr = args.corrections or corrections_for(check_stability(
+                net, train, mass=mass, known=part["known"], mode="corrected").added_mass_ratio)
         res = rollout(net, test, mass=mass, known=part["known"], mode=args.mode,
-                      force=args.allow_unstable, reference_for_check=train,
+                      corrections=n_corr, force=args.allow_unstable, reference_for_check=train,
                       progress=not args.quiet)
     except UnstablePartitionError as exc:  # name this command's option, not the library's
         reason = str(exc).split(" (pass ")[0]

@@ -24,7 +24,6 @@ The layout is described in docs/DATA_MODEL.md.
 
 from __future__ import annotations
 
-from hybridwsi._meta import version
 from hybridwsi.files import (
     NETCDF_MAGIC,
     atomic_write,

@@ -31,9 +31,7 @@ one stacked realisation.
 
 from __future__ import annotations
 
-import json
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 

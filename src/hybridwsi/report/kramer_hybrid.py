@@ -200,7 +200,6 @@ def measured_history(drop: str, setup: KramerSetup) -> xr.Dataset:
     ``F_tot = m z̈`` [N] and ``F_bb`` = F_tot − Σ known [N].
     """
     exp = read_kramer_drop(drop)
-    h0 = setup.drop_heights[drop]
     t = exp["time"].values
     keep = t >= -1e-9
     z = exp["z"].values[keep, 0]  # x3/H0 times the nominal H0 of the drop tag [m]

@@ -494,6 +494,13 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
         _log("Kramer hybrid: leave one drop out", progress)
         kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)
 
+    fowt_md = ""
+    if decay:  # floating wind: OC3-Hywind mooring, natural frequencies, decays, RAOs
+        from hybridwsi.report.fowt import run_fowt
+
+        _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
+        fowt_md = run_fowt(out, quick=quick, progress=progress)
+
     outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
                           force_accuracy=acc["BEM"]) if hybrid else "")
 
@@ -508,7 +515,7 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
     _write_json(out / "summary.json", summary)
     _write_text(out / "report.md", report_markdown(summary, md, note, sph_note, fig2, decay_md,
                                                    "SPH" in ours, decay)
-                + "\n" + kramer_md + "\n" + outlook_md)
+                + "\n" + kramer_md + "\n" + fowt_md + "\n" + outlook_md)
     return summary
 
 

@@ -22,7 +22,7 @@ import xarray as xr
 from hybridwsi.forces import KnownComponent, black_box_force
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError
-from hybridwsi.history import atomic_write, mass_matrix, time_step
+from hybridwsi.history import atomic_write, check_compatible
 from hybridwsi.surrogate.features import FeatureSpec, build_features, spec_for
 
 try:  # torch is the optional "ml" extra
@@ -57,20 +57,12 @@ def build_mlp(n_in: int, n_out: int, hidden: Sequence[int], activation: str) -> 
 def _check_training_set(histories: Sequence[xr.Dataset], targets: Sequence[np.ndarray]) -> None:
     """Refuse a training set the network cannot learn one force law from.
 
-    All histories must share the time step (within 1e-9 relative: the window taps are time
-    lags in samples) and the rigid-body mass (the residual force depends on it), and every
-    target force [N] must be finite (one NaN turns the loss, and R², into NaN).
+    All histories must share the DOFs, the time step (the window taps are time lags in
+    samples) and the rigid-body mass (the residual force depends on it):
+    :func:`hybridwsi.history.check_compatible`; and every target force [N] must be finite (one
+    NaN turns the loss, and R², into NaN).
     """
-    dts = [time_step(h) for h in histories]
-    if any(abs(d - dts[0]) > 1e-9 * abs(dts[0]) for d in dts):
-        raise InputError(f"training histories have different time steps {sorted(set(dts))} s; "
-                         "resample them to one step")
-    masses = [(i, m) for i, h in enumerate(histories) if (m := mass_matrix(h)) is not None]
-    for i, m in masses[1:]:
-        first = masses[0][1]
-        if m.shape != first.shape or not np.allclose(m, first, rtol=1e-9, atol=0.0):
-            raise InputError(f"training history {i} has mass {m.tolist()}, history "
-                             f"{masses[0][0]} has {masses[0][1].tolist()}: one body per network")
+    check_compatible(histories)  # one time step, one body (hybridwsi.history)
     for i, y in enumerate(targets):
         _check_finite(y, f"target force of training history {i}")
 
