@@ -387,7 +387,7 @@ def test_cli_import_outb_and_diagnose_out(tmp_path, capsys):
     # diagnose the text file: the regression of the pitch moment returns -A, -B, -C
     out = write_out(tmp_path / "pitch.out", ch, fmt="{:14.7E}")
     res_file = tmp_path / "r.json"
-    assert main(["diagnose", str(out), "--force", "F_platform", "--json", str(res_file)]) == 0
+    assert main(["diagnose", str(out), "--force-column", "F_platform", "--json", str(res_file)]) == 0
     res = json.loads(res_file.read_text())
     assert res["input"]["format"] == "openfast"
     assert res["alpha"] == pytest.approx(-a55, rel=1e-4)

@@ -174,7 +174,7 @@ def _with_time_step(h, dt: float):
 
 def test_training_set_of_mixed_step_or_mass_or_nan_force_is_refused():
     a = _linear_history(1.0, 0.5, 10.0, n=100)
-    with pytest.raises(InputError, match="time steps"):
+    with pytest.raises(InputError, match="time step"):
         ForceNetwork(max_epochs=1).fit([a, _with_time_step(a, 2 * DT)], "F_lin")
     # a step equal to 1e-12 relative is the same step
     ForceNetwork(max_epochs=1).fit([a, _with_time_step(a, DT * (1 + 1e-12))], "F_lin")

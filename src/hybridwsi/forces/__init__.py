@@ -20,6 +20,7 @@ from hybridwsi.forces.linear import (
     Hydrostatic,
     LinearDamping,
     QuadraticDamping,
+    known_from,
     parse_known,
 )
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
@@ -30,7 +31,8 @@ from hybridwsi.forces.rotor import ParkedRotor, RotorThrust, rotor_from_case
 __all__ = [
     "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
-    "QuadraticDamping", "parse_known", "RadiationMemory", "ConstantForce", "PrescribedForce",
+    "QuadraticDamping", "known_from", "parse_known", "RadiationMemory", "ConstantForce",
+    "PrescribedForce",
     "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
 ]

@@ -297,8 +297,8 @@ def validate(
             )
         peak = float(np.max(np.abs(var.values))) if var.size else 0.0
         if peak > MAX_MAGNITUDE:  # its squares (regression, energy, RMS) would overflow
-            raise InputError(f"'{name}' reaches {peak:.3g} (in SI units): not a physical value "
-                             f"(limit {MAX_MAGNITUDE:.0e})")
+            raise InputError(f"'{name}' reaches {peak:.3g} in SI units: its squares overflow "
+                             f"(not a physical value; limit {MAX_MAGNITUDE:.0e})")
     if "mass" in ds:
         check_mass(np.atleast_2d(np.asarray(ds["mass"].values, dtype=float)), ds.sizes["dof"])
     check_si(ds)
