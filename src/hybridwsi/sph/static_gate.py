@@ -20,6 +20,9 @@ from hybridwsi.sph import tank
 
 #: heights [m] at which the sphere is held (0.1 D above and below equilibrium)
 HEIGHTS = (-0.03, 0.0, 0.03)
+#: the gate: buoyancy error at equilibrium [fraction of the weight], secant stiffness [fraction]
+MAX_BUOYANCY_ERROR = 0.005
+MAX_STIFFNESS_ERROR = 0.01
 
 
 def exact_fluid_force(z: float, radius: float = tank.SPHERE_D / 2, rho: float = tank.RHO_WATER,
@@ -61,8 +64,9 @@ def held_force(dp: float, z: float, *, depth: float = 0.45, half_width: float = 
 
 def gate(results: list[dict[str, float]], weight: float = tank.SPHERE_MASS * tank.KRAMER_G,
          ) -> dict[str, float]:
-    """Buoyancy error at equilibrium [fraction of the weight] and secant stiffness error
-    [fraction] from :func:`held_force` results at -a, 0 and +a."""
+    """Buoyancy error at equilibrium [fraction of the weight], secant stiffness [N/m] and its
+    error [fraction], the largest force standard deviation [N] and whether the gate passes,
+    from :func:`held_force` results at -a, 0 and +a."""
     by_z = {r["z"]: r for r in results}
     zs = sorted(by_z)
     if len(zs) != 3 or not math.isclose(zs[1], 0.0, abs_tol=1e-12) or not math.isclose(
@@ -71,7 +75,10 @@ def gate(results: list[dict[str, float]], weight: float = tank.SPHERE_MASS * tan
     a = zs[2]
     k_sim = (by_z[-a]["mean"] - by_z[a]["mean"]) / (2.0 * a)
     k_exact = (by_z[-a]["exact"] - by_z[a]["exact"]) / (2.0 * a)
-    return {"buoyancy_error": (by_z[0.0]["mean"] - by_z[0.0]["exact"]) / weight,
-            "stiffness_sim": k_sim, "stiffness_exact": k_exact,
-            "stiffness_error": k_sim / k_exact - 1.0,
-            "max_std": max(r["std"] for r in results)}
+    out = {"buoyancy_error": (by_z[0.0]["mean"] - by_z[0.0]["exact"]) / weight,
+           "stiffness_sim": k_sim, "stiffness_exact": k_exact,
+           "stiffness_error": k_sim / k_exact - 1.0,
+           "max_std": max(r["std"] for r in results)}
+    out["pass"] = bool(abs(out["buoyancy_error"]) < MAX_BUOYANCY_ERROR
+                       and abs(out["stiffness_error"]) < MAX_STIFFNESS_ERROR)
+    return out

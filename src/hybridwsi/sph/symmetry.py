@@ -35,6 +35,11 @@ from typing import Any
 
 import numpy as np
 
+#: per plane axis, the properties whose sign a mirror image reverses: the coordinate, the
+#: velocity and the wall acceleration (which enters the ghost walls' pressure extrapolation)
+_NORMAL_PROPS = {0: ("x", "u", "awx"), 1: ("y", "v", "awy")}
+
+
 def ghost_tag() -> int:
     """PySPH's tag value of ghost particles."""
     from pysph.base.particle_array import get_ghost_tag
@@ -52,7 +57,8 @@ def check_planes(planes: tuple[int, ...]) -> tuple[int, ...]:
 
 def make_ghosts(pa: Any, planes: tuple[int, ...], width: float) -> int:
     """Replace the ghosts of ``pa`` by the mirror images of its particles within ``width`` [m]
-    of the planes x_axis = 0 (``planes``), normal velocity negated; returns the ghost count.
+    of the planes x_axis = 0 (``planes``), with the normal components of position, velocity
+    and wall acceleration negated (every other property copied); returns the ghost count.
 
     Planes are taken in turn and the images made for one plane are mirrored across the next
     one too, so a particle near the corner x = y = 0 gets its three images. The arrays are
@@ -84,11 +90,11 @@ def make_ghosts(pa: Any, planes: tuple[int, ...], width: float) -> int:
             arr[n:] = arr[g_src]
         else:
             arr.reshape(-1, stride)[n:] = arr.reshape(-1, stride)[g_src]
-    for ax, (cname, vname) in enumerate((("x", "u"), ("y", "v"))):
+    for ax in (0, 1):
         f = np.flatnonzero(g_flip[:, ax]) + n
-        if len(f):
-            pa.get(cname, only_real_particles=False)[f] *= -1.0
-            pa.get(vname, only_real_particles=False)[f] *= -1.0
+        for name in _NORMAL_PROPS[ax]:
+            if len(f) and name in pa.properties:
+                pa.get(name, only_real_particles=False)[f] *= -1.0
     pa.get("tag", only_real_particles=False)[n:] = ghost_tag()
     pa.set_num_real_particles(n)
     return k

@@ -142,14 +142,24 @@ def _tank_walls(lo: list[float], hi: list[float], dp: float, nlayers: int,
 
 
 def round_shell(centre: np.ndarray, radius: float, dp: float, nlayers: int,
-                quarter: bool = False, half: bool = False) -> np.ndarray:
+                quarter: bool = False, half: bool = False, mirrored: bool = False
+                ) -> np.ndarray:
     """Particles of a circle (2D) or sphere (3D) boundary: ``nlayers`` concentric layers at
     radii R - (k + 1/2) dp, spaced about dp along each layer, so the body surface (half a
     spacing outside the outer layer) is the true circle/sphere rather than a lattice staircase.
 
     In 3D, ``quarter`` keeps x > 0 and y > 0 (symmetry planes x = 0 and y = 0), ``half`` keeps
     y > 0; points are set half a spacing off those planes, like the lattice next to a wall.
+    ``mirrored`` builds every 3D shell from the quarter shell and its mirror images across
+    x = 0 and y = 0, so the quarter, half and full domains hold the same body (their rings
+    otherwise have different particle counts, which at R/dp = 4 moved the static force by
+    2 %); without it the half and full shells have rings of their own (the former layout).
     """
+    if mirrored and len(centre) == 3:
+        q = round_shell(np.zeros(3), radius, dp, nlayers, quarter=True)
+        parts = [q] if quarter else ([q, q * [-1, 1, 1]] if half else
+                                     [q, q * [-1, 1, 1], q * [1, -1, 1], q * [-1, -1, 1]])
+        return np.vstack(parts) + np.asarray(centre)[None, :]
     dim = len(centre)
     out = []
     for k in range(nlayers):
@@ -556,7 +566,7 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     # body: a shell nl particles thick (inner particles never see the fluid)
     if smooth_body:
         body = round_shell(centre, radius, dp, nl, quarter=(domain == "quarter"),
-                           half=(domain == "half"))
+                           half=(domain == "half"), mirrored=(symmetry == "mirror"))
     else:
         body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
     wlo, whi = list(lo), list(hi)
