@@ -1,17 +1,20 @@
 #!/usr/bin/env python
-"""Convergence study of the floating body's first decay cycle (issue 5).
+"""Convergence study of the floating body's first decay cycle (issues 5 and 15).
 
-Runs the 0.1 D heave decay of the Kramer sphere in a small quarter tank (depth 0.6 m, half
-width 0.75 m, 1 s after release) and of a half-immersed circle in 2D, for the body built from
+Runs the 0.1 D heave decay of the Kramer sphere in a small tank (depth 0.6 m, half width
+0.75 m, 1 s after release) and of a half-immersed circle in 2D, for the body built from
 lattice points (staircase surface) or from smooth concentric shells, h/dp = 1.3 or 1.5, and
-a 0.3 s hold before release. Each case's result is one JSON line in ``<out>/results.jsonl``;
-cases already there are skipped, so the study resumes after an interruption.
+a 0.3 s hold before release. The 3D tank is a quarter, half or full domain (``--domain``)
+whose symmetry planes are true mirror planes or, as before issue 15, fixed walls
+(``--symmetry``). Each case's result is one JSON line in ``<out>/results.jsonl``; cases
+already there are skipped, so the study resumes after an interruption.
 
     OMP_NUM_THREADS=1 python scripts/sph_body_convergence.py --out results/sph_body
-    python scripts/sph_body_convergence.py --out results/sph_body --only 3d --dp 0.03
+    python scripts/sph_body_convergence.py --out results/sph_body --only 3d --dp 0.0375 \
+        --smooth smooth --hdx 1.5 --domain quarter half full --symmetry mirror
 
-About 2 min per 3D case at dp = D/8 and 6 min at D/10 on one core; the 2D cases take
-10 s to 3 min.
+About 2 min per 3D quarter-domain case at dp = D/8 and 6 min at D/10 on one core (the full
+domain has about three times the particles); the 2D cases take 10 s to 3 min.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from pathlib import Path
 from hybridwsi.bodies import cap_volume
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import tank
-from hybridwsi.sph.decay import compare_decay, first_extrema
+from hybridwsi.sph.decay import compare_decay, crossing_periods, first_extrema
 from hybridwsi.sph.run import run_case
 
 R = 0.15
@@ -41,10 +44,12 @@ def exact_hold_force(dim: int, g: float) -> float:
     return -tank.RHO_WATER * g * (cap_volume(R, R) - cap_volume(R - Z0, R))
 
 
-def run_one(dim: int, dp: float, smooth: bool, hdx: float) -> dict:
+def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarter",
+            symmetry: str = "mirror") -> dict:
     if dim == 3:
         case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
-                            smooth_body=smooth, t_release=0.3)
+                            smooth_body=smooth, t_release=0.3, domain=domain,
+                            symmetry=symmetry)
     else:
         case = tank.decay2d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
                             smooth_body=smooth, t_release=0.3)
@@ -55,13 +60,23 @@ def run_one(dim: int, dp: float, smooth: bool, hdx: float) -> dict:
            "hold_force": hist["F_tot"].attrs["hold_mean"],
            "hold_force_exact": exact_hold_force(dim, case.g)}
     if dim == 3:
+        res.update(domain=domain, symmetry=symmetry)
         cmp = compare_decay(hist, Z0, z_eq=0.0)
-        res.update({k: v for k, v in cmp.items()
-                    if k.startswith(("trough", "crest", "period_extrema"))})
+        res.update({k: v for k, v in cmp.items() if k.startswith(("trough", "crest", "period"))})
+        # first full cycle from the first two crossings of the equilibrium
+        p = crossing_periods(hist["time"].values, hist["z"].values[:, 0] / Z0)
+        res["period_first_cycle"] = float(p[0]) if len(p) else float("nan")
     else:
         t1, z1, t2, z2 = first_extrema(hist["time"].values, hist["z"].values[:, 0] / Z0)
         res.update(trough_t_sim=t1, trough_sim=z1, crest_t_sim=t2, crest_sim=z2)
     return res
+
+
+def _key(r: dict) -> tuple:
+    # results written before issue 15 were quarter domains with wall planes
+    return (r["dim"], r["dp"], r["smooth_body"], r["hdx"],
+            r.get("domain", "quarter") if r["dim"] == 3 else "full",
+            r.get("symmetry", "wall") if r["dim"] == 3 else "none")
 
 
 def main() -> None:
@@ -69,23 +84,35 @@ def main() -> None:
     ap.add_argument("--out", default="results/sph_body")
     ap.add_argument("--only", choices=["2d", "3d"], default=None)
     ap.add_argument("--dp", type=float, nargs="*", default=None, help="subset of spacings [m]")
+    ap.add_argument("--hdx", type=float, nargs="*", default=[1.3, 1.5], help="h/dp values")
+    ap.add_argument("--smooth", choices=["both", "smooth", "lattice"], default="both",
+                    help="body from smooth shells, lattice points, or both")
+    ap.add_argument("--domain", nargs="*", choices=["quarter", "half", "full"],
+                    default=["quarter"], help="3D domains (default quarter)")
+    ap.add_argument("--symmetry", nargs="*", choices=["mirror", "wall"], default=["mirror"],
+                    help="3D symmetry planes: true mirror planes or fixed walls")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "results.jsonl"
     done = [json.loads(s) for s in path.read_text().splitlines()] if path.exists() else []
     grid = {2: [0.03, 0.015, 0.01], 3: [0.0375, 0.03]}
+    smooth = {"both": (False, True), "smooth": (True,), "lattice": (False,)}[a.smooth]
     for dim in (2, 3):
         if a.only and a.only != f"{dim}d":
             continue
-        for dp, smooth, hdx in itertools.product(grid[dim], (False, True), (1.3, 1.5)):
-            if a.dp and dp not in a.dp:
+        extra = (list(itertools.product(a.domain, a.symmetry)) if dim == 3
+                 else [("full", "none")])
+        for dp, sm, hdx, (dom, sym) in itertools.product(a.dp or grid[dim], smooth, a.hdx,
+                                                         extra):
+            if dim == 3 and dom == "full" and sym == "wall":
+                continue  # a full domain has no planes: one run covers both
+            key = (dim, dp, sm, hdx, dom, sym)
+            if any(_key(r) == key for r in done):
                 continue
-            key = (dim, dp, smooth, hdx)
-            if any((r["dim"], r["dp"], r["smooth_body"], r["hdx"]) == key for r in done):
-                continue
-            print(f"running dim={dim} dp={dp} smooth={smooth} hdx={hdx}", flush=True)
-            done.append(run_one(*key))
+            print(f"running dim={dim} dp={dp} smooth={sm} hdx={hdx} domain={dom} "
+                  f"symmetry={sym}", flush=True)
+            done.append(run_one(dim, dp, sm, hdx, *((dom, sym) if dim == 3 else ())))
             print(json.dumps(done[-1]), flush=True)
             text = "".join(json.dumps(r) + "\n" for r in done)
             atomic_write(path, lambda tmp, text=text: Path(tmp).write_text(text))

@@ -97,13 +97,20 @@ def test_free_circle_released_above_equilibrium():
                                rtol=1e-12)
 
 
-def test_resume_gives_the_uninterrupted_result(tmp_path):
-    kw = {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "tf": 0.06}
-    ref = run_case(tank.decay2d(**kw), progress=False)
+@pytest.mark.parametrize("name, kw, stop", [
+    ("decay2d", {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "tf": 0.06}, 80),
+    # 3D quarter domain with mirror planes: the checkpoint holds the real particles only and
+    # the ghosts are made again from them on resume
+    ("decay3d", {"dp": 0.0375, "depth": 0.3, "half_width": 0.3, "tf": 0.03, "t_release": 0.0,
+                 "smooth_body": False}, 20),
+])
+def test_resume_gives_the_uninterrupted_result(tmp_path, name, kw, stop):
+    ref = run_case(tank.build(name, **kw), progress=False)
     ck = tmp_path / "run.ckpt.npz"
-    part = run_case(tank.decay2d(**kw), checkpoint=ck, progress=False, stop_after_steps=80)
+    part = run_case(tank.build(name, **kw), checkpoint=ck, progress=False,
+                    stop_after_steps=stop)
     assert part.sizes["time"] < ref.sizes["time"]
-    res = run_case(tank.decay2d(**kw), tmp_path / "run.nc", checkpoint=ck, resume=True,
+    res = run_case(tank.build(name, **kw), tmp_path / "run.nc", checkpoint=ck, resume=True,
                    progress=False)
     for name in ("z", "zdot", "F_tot"):
         np.testing.assert_array_equal(res[name].values, ref[name].values)
@@ -148,6 +155,15 @@ def test_round_shell_quarter_keeps_off_the_symmetry_planes():
     full = tank.round_shell(np.zeros(3), R, dp, 3)
     assert np.all(q[:, 0] > 0) and np.all(q[:, 1] > 0)
     assert len(q) == pytest.approx(len(full) / 4, rel=0.15)
+    # mirrored shells: the half and full bodies are the quarter's mirror images, particle for
+    # particle, so a symmetric domain and the whole domain simulate the same body
+    for kw, signs in [({"half": True}, [(1, 1), (-1, 1)]),
+                      ({}, [(1, 1), (-1, 1), (1, -1), (-1, -1)])]:
+        m = tank.round_shell(np.zeros(3), R, dp, 3, mirrored=True, **kw)
+        exp = np.vstack([q * [sx, sy, 1] for sx, sy in signs])
+        np.testing.assert_allclose(np.sort(m, axis=0), np.sort(exp, axis=0), atol=1e-14)
+        r = np.linalg.norm(m, axis=1)
+        assert np.all(r < R) and np.all(np.abs(m[:, :2]).min(axis=0) > 0.1 * dp)
 
 
 def test_held_release_reports_the_static_force_and_starts_at_rest():

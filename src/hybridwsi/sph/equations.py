@@ -162,9 +162,13 @@ class WallForce(Equation):
     pressure + artificial-viscosity terms that the fluid feels from it in MomentumEquation,
     so the body and the fluid exchange momentum exactly.
 
-    With symmetry planes x = 0 and/or y = 0 (bits 1 and 2 of ``body[B_SYM]``) the mirror images
-    of the fluid neighbours push on the body too (an image is never closer than its original,
-    so looping over the real neighbours finds every image within the kernel support).
+    Symmetry planes built as walls (``symmetry="wall"``: bits 1 and 2 of ``body[B_SYM]`` for
+    x = 0 and y = 0) have no fluid beyond them, so the mirror images of the fluid neighbours
+    are added here (an image is never closer than its original, so looping over the real
+    neighbours finds every image within the kernel support). With true mirror planes
+    (:mod:`hybridwsi.sph.symmetry`) ``body[B_SYM]`` is 0: the ghost fluid particles are
+    sources of this equation like the real ones, and each (real body, fluid or ghost) pair
+    is counted once.
     """
 
     def __init__(self, dest, sources, alpha=0.1):
@@ -226,6 +230,7 @@ class BodyForceReduce(Equation):
         mask = declare("object")
         fv = declare("object")
         b = dst.body
+        # attribute access gives the real particles only: mirror ghosts are never summed
         mask = dst.flag == 2
         fv = dst.fz
         if b[10] < 1.5:

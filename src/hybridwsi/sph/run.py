@@ -20,9 +20,10 @@ import xarray as xr
 
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, make_history, to_netcdf
+from hybridwsi.sph.symmetry import mirror_domain, n_real, reflect_crossers, remove_ghosts
 from hybridwsi.sph.tank import SPHCase, free_surface
 
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2  # 2: real particles only (no mirror ghosts)
 
 
 def make_equations(case: SPHCase) -> list:
@@ -90,10 +91,20 @@ def make_solver(case: SPHCase, openmp: bool = False):
     solver.set_disable_output(True)
     solver.set_parallel_manager(None)  # serial run (what Application does without MPI)
     particles = [case.fluid, case.wall]
+    # mirror ghosts within two kernel supports of each symmetry plane (see symmetry.py)
+    domain = mirror_domain(case.mirror, 2.0 * kernel.radius_scale * case.h)
     nnps = LinkedListNNPS(dim=case.dim, particles=particles, radius_scale=kernel.radius_scale,
-                          fixed_h=True)
+                          fixed_h=True, domain=domain)
     solver.setup(particles=particles, equations=make_equations(case), nnps=nnps,
                  kernel=kernel, fixed_h=True)
+    if case.mirror:
+        def keep_on_real_side(t: float, dt: float, stage: int) -> None:
+            # after the corrector only (the predictor's x0, u0 must stay consistent); the
+            # ghosts were made before the move, so make them again if anything moved
+            if stage == 2 and reflect_crossers(case.fluid, case.mirror):
+                nnps.update_domain()
+
+        solver.add_post_stage_callback(keep_on_real_side)
     return solver
 
 
@@ -179,8 +190,9 @@ def write_checkpoint(path: Path, case: SPHCase, count: int, rows: list[dict[str,
         CHECKPOINT_VERSION), "_inputs": np.array(_inputs_key(case))}
     for pa in (case.fluid, case.wall):
         name = pa.name
+        n = n_real(pa)  # mirror ghosts are remade from the real particles on resume
         for prop in pa.properties:
-            data[f"{name}/p/{prop}"] = pa.get(prop)
+            data[f"{name}/p/{prop}"] = pa.get(prop)[:n * pa.stride.get(prop, 1)]
         for const in pa.constants:
             data[f"{name}/c/{const}"] = np.array(getattr(pa, const))
     for k, v in _rows_to_arrays(rows).items():
@@ -194,7 +206,9 @@ def write_checkpoint(path: Path, case: SPHCase, count: int, rows: list[dict[str,
 
 
 def read_checkpoint(path: Path, case: SPHCase) -> tuple[int, list[dict[str, Any]]]:
-    """Load a checkpoint into ``case``'s arrays; return (step count, samples so far)."""
+    """Load a checkpoint into ``case``'s arrays; return (step count, samples so far).
+
+    Mirror ghosts are removed first; the caller remakes them (``nnps.update_domain()``)."""
     try:
         with np.load(path, allow_pickle=False) as f:
             data = {k: f[k] for k in f.files}
@@ -203,6 +217,7 @@ def read_checkpoint(path: Path, case: SPHCase) -> tuple[int, list[dict[str, Any]
     if str(data["_inputs"]) != _inputs_key(case):
         raise InputError(f"checkpoint {path} was written for other inputs; delete it or "
                          "run with the same options")
+    remove_ghosts(case.fluid, case.wall)
     for pa in (case.fluid, case.wall):
         n = pa.get_number_of_particles()
         for prop in pa.properties:
@@ -257,6 +272,7 @@ def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
     count, rows = 0, []
     if resume and ckpt is not None and ckpt.is_file():
         count, rows = read_checkpoint(ckpt, case)
+        solver.nnps.update_domain()  # the mirror ghosts of the restored particles
     else:
         # PEC uses the accelerations of the previous evaluation in its predictor
         integ.initial_acceleration(0.0, dt)

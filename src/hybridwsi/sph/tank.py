@@ -80,6 +80,9 @@ class SPHCase:
     #: a free body is held until this time [s]; the history starts at the release (t = 0)
     t_release: float = 0.0
     inputs: dict[str, Any] = field(default_factory=dict)
+    #: axes whose zero plane is a true mirror-symmetry plane (0: x = 0, 1: y = 0; 3D only):
+    #: the run adds ghost images of every particle near them (:mod:`hybridwsi.sph.symmetry`)
+    mirror: tuple[int, ...] = ()
 
     @property
     def h(self) -> float:
@@ -104,7 +107,9 @@ class SPHCase:
 
     @property
     def n_particles(self) -> int:
-        return int(self.fluid.get_number_of_particles() + self.wall.get_number_of_particles())
+        """Real particles (fluid and solid; mirror ghosts not counted)."""
+        return int(self.fluid.get_number_of_particles(real=True)
+                   + self.wall.get_number_of_particles(real=True))
 
 
 # --------------------------------------------------------------------------- lattices
@@ -137,14 +142,24 @@ def _tank_walls(lo: list[float], hi: list[float], dp: float, nlayers: int,
 
 
 def round_shell(centre: np.ndarray, radius: float, dp: float, nlayers: int,
-                quarter: bool = False, half: bool = False) -> np.ndarray:
+                quarter: bool = False, half: bool = False, mirrored: bool = False
+                ) -> np.ndarray:
     """Particles of a circle (2D) or sphere (3D) boundary: ``nlayers`` concentric layers at
     radii R - (k + 1/2) dp, spaced about dp along each layer, so the body surface (half a
     spacing outside the outer layer) is the true circle/sphere rather than a lattice staircase.
 
     In 3D, ``quarter`` keeps x > 0 and y > 0 (symmetry planes x = 0 and y = 0), ``half`` keeps
     y > 0; points are set half a spacing off those planes, like the lattice next to a wall.
+    ``mirrored`` builds every 3D shell from the quarter shell and its mirror images across
+    x = 0 and y = 0, so the quarter, half and full domains hold the same body (their rings
+    otherwise have different particle counts, which at R/dp = 4 moved the static force by
+    2 %); without it the half and full shells have rings of their own (the former layout).
     """
+    if mirrored and len(centre) == 3:
+        q = round_shell(np.zeros(3), radius, dp, nlayers, quarter=True)
+        parts = [q] if quarter else ([q, q * [-1, 1, 1]] if half else
+                                     [q, q * [-1, 1, 1], q * [1, -1, 1], q * [-1, -1, 1]])
+        return np.vstack(parts) + np.asarray(centre)[None, :]
     dim = len(centre)
     out = []
     for k in range(nlayers):
@@ -239,8 +254,10 @@ def fluid_fraction(fluid, points: np.ndarray, dim: int) -> np.ndarray:
     lattice); it is the standard kernel colour function used to locate a particle free surface.
     """
     pts = np.atleast_2d(np.asarray(points, dtype=float))
-    xs = [fluid.x, fluid.y] if dim == 2 else [fluid.x, fluid.y, fluid.z]
-    supp = 2.0 * float(np.max(fluid.h)) if fluid.get_number_of_particles() else 0.0
+    # mirror ghosts included: next to a symmetry plane they are the fluid beyond it
+    prop = {k: _with_ghosts(fluid, k) for k in ("x", "y", "z", "m", "rho", "h")}
+    xs = [prop["x"], prop["y"]] if dim == 2 else [prop["x"], prop["y"], prop["z"]]
+    supp = 2.0 * float(np.max(prop["h"])) if fluid.get_number_of_particles() else 0.0
     lo, hi = pts.min(axis=0) - supp, pts.max(axis=0) + supp
     sel = np.ones(len(xs[0]), dtype=bool)
     for ax, xa in enumerate(xs):
@@ -248,9 +265,17 @@ def fluid_fraction(fluid, points: np.ndarray, dim: int) -> np.ndarray:
     if not np.any(sel):
         return np.zeros(len(pts))
     src = np.stack([xa[sel] for xa in xs], axis=1)
-    vol = fluid.m[sel] / fluid.rho[sel]
+    vol = prop["m"][sel] / prop["rho"][sel]
     r = np.linalg.norm(pts[:, None, :] - src[None, :, :], axis=2)
-    return _wendland_quintic(r, fluid.h[sel][None, :], dim) @ vol
+    return _wendland_quintic(r, prop["h"][sel][None, :], dim) @ vol
+
+
+def _with_ghosts(pa, name: str) -> np.ndarray:
+    """A property of every particle of ``pa``, mirror ghosts included (PySPH's attribute
+    access returns the real particles only); plain attribute for other particle objects."""
+    if hasattr(pa, "properties"):
+        return pa.get(name, only_real_particles=False)
+    return getattr(pa, name)
 
 
 def free_surface(fluid, x: float, dp: float, dim: int, y: float = 0.0) -> float:
@@ -392,27 +417,31 @@ def waves3d(dp: float = 0.0375, depth: float = 0.45, period: float = 0.75,
             tf: float = 6.0, t_ramp: float | None = None, c0_factor: float = 10.0,
             probes: tuple[float, ...] | None = None, alpha: float = BODY_ALPHA,
             hdx: float = BODY_HDX, alpha_wall: float | None = None,
-            gain: float = 1.0) -> SPHCase:
+            gain: float = 1.0, symmetry: str = "mirror") -> SPHCase:
     """3D piston wave flume without a body: :func:`regular3d`'s tank (half width with the
     symmetry plane y = 0, damping zone over the last wavelength), to measure or calibrate
     the wave that reaches the body. Probes halfway between the symmetry plane and the side
     wall, by default at 1, 1.5 and 2 wavelengths (the body of :func:`regular3d` is at 2).
     ``alpha_wall`` is the artificial viscosity between fluid and walls (default ``alpha``);
-    ``gain`` multiplies the Biésel stroke. Lengths in m, times in s.
+    ``gain`` multiplies the Biésel stroke; ``symmetry`` ``"mirror"`` makes y = 0 a true
+    mirror plane, ``"wall"`` a fixed wall (the former set-up). Lengths in m, times in s.
     """
+    _symmetry_planes(3, True, "half", symmetry)
     k = wavemaker.wavenumber(period, depth, KRAMER_G)
     lam = 2 * math.pi / k
     return _flume("waves3d", 3, dp, depth, period, height,
                   4.0 * lam if length is None else length, half_width, tf, t_ramp, c0_factor,
                   (lam, 1.5 * lam, 2.0 * lam) if probes is None else probes, alpha, hdx,
-                  KRAMER_G, alpha_wall=alpha_wall, gain=gain)
+                  KRAMER_G, alpha_wall=alpha_wall, gain=gain, symmetry=symmetry)
 
 
 def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: float,
            length: float | None, half_width: float, tf: float, t_ramp: float | None,
            c0_factor: float, probes: tuple[float, ...] | None, alpha: float, hdx: float,
-           g: float, alpha_wall: float | None = None, gain: float = 1.0) -> SPHCase:
-    """Piston flume, 2D or 3D (y in [0, half_width]), damping zone over the last wavelength."""
+           g: float, alpha_wall: float | None = None, gain: float = 1.0,
+           symmetry: str = "wall") -> SPHCase:
+    """Piston flume, 2D or 3D (y in [0, half_width], the plane y = 0 a mirror plane or a
+    wall as ``symmetry`` says), damping zone over the last wavelength."""
     _check_dp(dp, depth)
     if height / dp < 1.0:
         raise InputError(f"wave height {height} m is below one particle spacing dp = {dp} m")
@@ -432,8 +461,9 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
     fl = _grid([0.0] + mid[:1] + [0.0], [L] + mid[1:] + [depth], dp)
     # bottom extends under the paddle's travel; the x-min wall (the paddle) is built apart
     margin = 0.5 * stroke + 2 * dp
+    mirror = (1,) if dim == 3 and symmetry == "mirror" else ()
     wl = _tank_walls([-margin] + mid[:1] + [0.0], [L] + mid[1:] + [top], dp, nl,
-                     open_sides=(0,))
+                     open_sides=(0, 2) if mirror else (0,))
     wl = wl[wl[:, 0] > -margin]  # drop the unused x-min corner
     paddle = _grid([-nl * dp] + mid[:1] + [0.0], [0.0] + mid[1:] + [top], dp)
     pts = np.vstack([wl, paddle])
@@ -448,7 +478,7 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
     case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g, hdx=hdx,
                    alpha=alpha, alpha_wall=alpha_wall, damping=(L - lam, L, 3.0 * omega),
                    output_dt=min(0.01, period / 40),
-                   probes=[(float(x), y_probe) for x in x_probes])
+                   probes=[(float(x), y_probe) for x in x_probes], mirror=mirror)
     case.inputs = {"case": name, "dp": dp, "depth": depth, "period": period, "height": height,
                    "length": L, "tf": tf, "t_ramp": float(wall.piston[5]), "c0_factor": c0_factor,
                    "stroke": stroke, "wavelength": lam, "probes": list(map(float, x_probes)),
@@ -456,7 +486,8 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
     if gain != 1.0:
         case.inputs["gain"] = gain
     if dim == 3:
-        case.inputs.update(half_width=half_width, g=g, alpha_wall=alpha_wall, gain=gain)
+        case.inputs.update(half_width=half_width, g=g, alpha_wall=alpha_wall, gain=gain,
+                           symmetry=symmetry)
     return case
 
 
@@ -468,9 +499,16 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                probes: list[tuple[float, float]] | None = None,
                alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
                hdx: float = BODY_HDX, t_release: float = 0.0,
-               smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
-    """Half-submerged circle (2D) or sphere (3D, quarter domain with symmetry planes x = 0 and
-    y = 0 unless a paddle is used, then only y = 0) released from z0 [m] above equilibrium.
+               smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
+               symmetry: str = "mirror") -> SPHCase:
+    """Half-submerged circle (2D) or sphere (3D) released from z0 [m] above equilibrium.
+
+    ``domain`` (3D): ``"quarter"`` (symmetry planes x = 0 and y = 0; the default without a
+    paddle), ``"half"`` (plane y = 0; the default with a paddle, which sits at x = 0) or
+    ``"full"``. ``symmetry``: ``"mirror"`` makes the planes true mirror planes (ghost images
+    of the fluid and of every solid, :mod:`hybridwsi.sph.symmetry`); ``"wall"`` builds them
+    as fixed walls, as the runs before issue 15 did (each such plane cost ~2 % of period and
+    0.5 N of static force at D/8, see ``docs/SPH_RUNS.md``).
 
     ``alpha`` is the artificial-viscosity coefficient (see :data:`BODY_ALPHA`), ``alpha_wall``
     the one between fluid and solid particles (default ``alpha``), ``hdx`` = h/dp. The body is
@@ -495,18 +533,25 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
         # immersed): 3 omega relaxes a wave within the layer (as the flume's beach)
         c_hyd = RHO_WATER * g * (2.0 * radius if dim == 2 else math.pi * radius ** 2)
         damping = (half_width - sponge, half_width, 3.0 * math.sqrt(c_hyd / (2.0 * mass)))
+    planes = _symmetry_planes(dim, piston is not None, domain, symmetry)
+    domain = ("full" if dim == 2 else ("half" if piston is not None else "quarter")
+              ) if domain is None else domain
     rho0 = RHO_WATER
     c0 = _c0(g, depth, c0_factor)
     nl = _nlayers(hdx)
     v = dim - 1
-    # horizontal extent: x in [x_lo, x_hi], y in [0, half_width] (3D)
+    # horizontal extent: x in [x_lo, x_hi], y in [y_lo, half_width] (3D)
     if piston is None:
-        x_lo, x_hi = (0.0 if dim == 3 else -half_width), half_width
+        x_lo, x_hi = (0.0 if domain == "quarter" else -half_width), half_width
         open_sides: tuple[int, ...] = ()
     else:
         x_lo, x_hi = 0.0, float(length)
         open_sides = (0,)
-    lo = [x_lo] + ([0.0] if dim == 3 else []) + [0.0]
+    y_lo = -half_width if domain == "full" else 0.0
+    if symmetry == "mirror":
+        # no wall on a mirror plane: its ghosts stand in for the fluid and solids beyond it
+        open_sides += tuple(2 * ax for ax in planes if 2 * ax not in open_sides)
+    lo = [x_lo] + ([y_lo] if dim == 3 else []) + [0.0]
     hi = [x_hi] + ([half_width] if dim == 3 else []) + [depth]
     top = depth + radius + 4 * dp
     centre = np.zeros(dim)
@@ -520,8 +565,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     fl = pts_all[(r >= radius) & (pts_all[:, v] < depth)]
     # body: a shell nl particles thick (inner particles never see the fluid)
     if smooth_body:
-        body = round_shell(centre, radius, dp, nl, quarter=(dim == 3 and piston is None),
-                           half=(dim == 3 and piston is not None))
+        body = round_shell(centre, radius, dp, nl, quarter=(domain == "quarter"),
+                           half=(domain == "half"), mirrored=(symmetry == "mirror"))
     else:
         body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
     wlo, whi = list(lo), list(hi)
@@ -531,23 +576,22 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     walls = _tank_walls(wlo, whi, dp, nl, open_sides=open_sides)
     if piston is not None:
         walls = walls[walls[:, 0] > wlo[0]]
-        plo = [-nl * dp] + ([0.0] if dim == 3 else []) + [0.0]
+        plo = [-nl * dp] + ([y_lo] if dim == 3 else []) + [0.0]
         phi = [0.0] + ([half_width] if dim == 3 else []) + [top]
         paddle = _grid(plo, phi, dp)
     else:
         paddle = np.zeros((0, dim))
-    # symmetry planes are walls without the outer x/y-min layers in 3D: keep them (free slip
-    # is approximated by the Adami wall, see report); no extra work needed here
     pts = np.vstack([walls, paddle, body])
     flags = np.r_[np.zeros(len(walls)), np.ones(len(paddle)), np.full(len(body), 2.0)]
     fluid, wall = _arrays(dim, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
                           hydrostatic=True)
-    scale = 1.0 if dim == 2 else (2.0 if piston is not None else 4.0)
+    scale = {"full": 1.0, "half": 2.0, "quarter": 4.0}[domain]
     b = wall.body
     # whole-body mass [kg]; BodyForceReduce scales the simulated part's force up by ``scale``
     b[0], b[7], b[8], b[9] = z0, mass, scale, 1.0 if free else 0.0
-    # symmetry planes for the body force: bit 1 -> x = 0, bit 2 -> y = 0 (3D only)
-    b[15] = 0.0 if dim == 2 else (2.0 if piston is not None else 3.0)
+    # planes built as walls: WallForce adds the images of the fluid to the body force itself
+    # (bit 1 -> x = 0, bit 2 -> y = 0); mirror planes have real ghosts instead
+    b[15] = 0.0 if symmetry == "mirror" else float(sum(1 << ax for ax in planes))
     # equilibrium positions (the stepper places body particles at xi + z e_v)
     (wall.yi, wall.zi)[v - 1][flags == 2] -= z0
     if piston is not None:
@@ -555,7 +599,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
                    hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
                    output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall,
-                   damping_radial=sponge > 0.0)
+                   damping_radial=sponge > 0.0,
+                   mirror=planes if symmetry == "mirror" else ())
     if t_release > 0.0:
         # release on an output sample; PEC evaluates forces at mid-step, so the body is free
         # from the evaluation half a step before it and the first sample has m zddot = F_tot
@@ -589,28 +634,37 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
             z0_over_d: float = 0.1, tf: float = 5 * 0.7561 + 0.05, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
-            smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
-    """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D) on a quarter
-    domain with symmetry planes x = 0 and y = 0; walls at ``half_width`` [m]. The default
-    ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS window."""
+            smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
+            symmetry: str = "mirror") -> SPHCase:
+    """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D); walls at
+    ``half_width`` [m] from the sphere's axis. ``domain`` ``"quarter"`` (default; symmetry
+    planes x = 0 and y = 0), ``"half"`` (y = 0) or ``"full"``; ``symmetry`` ``"mirror"``
+    (true mirror planes, default) or ``"wall"`` (planes as fixed walls, the former set-up).
+    The default ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS
+    window."""
     case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
                       alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release,
-                      smooth_body=smooth_body, sponge=sponge)
+                      smooth_body=smooth_body, sponge=sponge, domain=domain,
+                      symmetry=symmetry)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
                        "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
-                       "smooth_body": smooth_body, "sponge": sponge}
+                       "smooth_body": smooth_body, "sponge": sponge, "domain": domain,
+                       "symmetry": symmetry}
     return case
 
 
 def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.75,
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
-              smooth_body: bool = True, gain: float = 1.0) -> SPHCase:
+              smooth_body: bool = True, gain: float = 1.0, domain: str = "half",
+              symmetry: str = "mirror") -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
-    narrow flume (half width, symmetry plane y = 0) with a piston and a damping zone.
+    narrow flume (``domain`` ``"half"``: symmetry plane y = 0, or ``"full"``) with a piston
+    and a damping zone. ``symmetry``: ``"mirror"`` (true mirror plane) or ``"wall"`` (the
+    plane as a fixed wall, as in the shipped D/12 run).
 
     The body is two wavelengths from the paddle. ``gain`` multiplies the Biésel stroke: at
     coarse spacing the wave loses height on its way (numerical damping), so, as in a
@@ -630,12 +684,30 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                       tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
-                      probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body)
+                      probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body,
+                      domain=domain, symmetry=symmetry)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
-                       "smooth_body": smooth_body, "gain": gain}
+                       "smooth_body": smooth_body, "gain": gain, "domain": domain,
+                       "symmetry": symmetry}
     return case
+
+
+def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
+                     ) -> tuple[int, ...]:
+    """Axes of the symmetry planes (0: x = 0, 1: y = 0) of a body case's domain."""
+    if symmetry not in ("mirror", "wall"):
+        raise InputError(f"symmetry must be 'mirror' or 'wall', got {symmetry!r}")
+    if domain is None:
+        domain = "full" if dim == 2 else ("half" if piston else "quarter")
+    if domain not in ("quarter", "half", "full"):
+        raise InputError(f"domain must be 'quarter', 'half' or 'full', got {domain!r}")
+    if dim == 2 and domain != "full":
+        raise InputError("2D body cases are full domains (domain='full')")
+    if piston and domain == "quarter":
+        raise InputError("a paddle case cannot be a quarter domain (the paddle is at x = 0)")
+    return {"quarter": (0, 1), "half": (1,), "full": ()}[domain]
 
 
 def _check_gain(gain: float) -> None:
