@@ -36,6 +36,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--gain", type=o.positive_float, default=None,
                         help="waves3d, regular3d: factor on the Biésel paddle stroke, from a "
                              "calibration in the empty flume (scripts/sph_wave_calibration.py)")
+    parser.add_argument("--domain", choices=("quarter", "half", "full"), default=None,
+                        help="decay3d, regular3d: the part of the symmetric tank simulated "
+                             "(default: the case's, quarter for decay3d, half for regular3d)")
+    parser.add_argument("--symmetry", choices=("mirror", "wall"), default=None,
+                        help="3D cases: symmetry planes as mirror images of every particle "
+                             "(default) or as free-slip walls (the old set-up, for comparison)")
     parser.add_argument("--lattice-body", action="store_true",
                         help="body cases: build the body from lattice points (staircase "
                              "surface) instead of smooth concentric shells, for comparison")
@@ -61,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_path(out)
     case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth, hdx=args.hdx,
                       t_release=args.hold, sponge=args.sponge, gain=args.gain,
+                      domain=args.domain, symmetry=args.symmetry,
                       smooth_body=(False if args.lattice_body else None))
     if not args.quiet:
         print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} "
