@@ -160,8 +160,7 @@ def run(args: argparse.Namespace) -> int:
                       corrections=n_corr, force=args.allow_unstable, reference_for_check=train,
                       progress=not args.quiet)
     except UnstablePartitionError as exc:  # name this command's option, not the library's
-        reason = str(exc).split(" (pass ")[0]
-        raise UnstablePartitionError(f"{reason} (pass --allow-unstable to run anyway)") from None
+        raise InputError(f"{exc.reason} (pass --allow-unstable to run anyway)") from None
     out = Path(args.out)
     net.save(out / "network")  # only once the rollout is accepted: no network left on refusal
     errors = res.errors(test)

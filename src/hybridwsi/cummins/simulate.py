@@ -31,10 +31,9 @@ from hybridwsi.cummins.forcing import (
 )
 from hybridwsi.cummins.solvers import run_linear, run_stepping, solve_convolution
 from hybridwsi.cummins.system import CumminsSystem, build_system
-from hybridwsi.dofs import force_unit, motion_unit
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import ExactHydrostatic, KnownComponent, summed_linear_coefficients
-from hybridwsi.history import make_history
+from hybridwsi.history import make_history, units_attrs
 from hybridwsi.hydro.coefficients import pair_units_attr, unit_matrix
 from hybridwsi.hydro.statespace import RadiationSS
 from hybridwsi.waves import Wave
@@ -245,14 +244,10 @@ def _matrix_vars(sys: CumminsSystem) -> dict[str, tuple]:
 
 
 def _set_dof_units(ds: xr.Dataset, dofs: Sequence[str]) -> None:
-    """Per-DOF ``units`` (e.g. ``"m, rad"``) and ``units_per_dof`` (JSON list) in place."""
-    per = {q: [motion_unit(d, q) for d in dofs] for q in ("z", "zdot", "zddot")}
-    per["force"] = [force_unit(d) for d in dofs]
+    """Per-DOF units (:func:`hybridwsi.history.units_attrs`) on a batch Dataset, in place
+    (single runs get them from ``make_history``)."""
     for name in ("z", "zdot", "zddot", *FORCES):
-        units = per["force" if name in FORCES else name]
-        attrs = ds.variables[name].attrs
-        attrs["units"] = ", ".join(dict.fromkeys(units))
-        attrs["units_per_dof"] = json.dumps(units)
+        ds.variables[name].attrs.update(units_attrs("force" if name in FORCES else name, dofs))
 
 
 def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs, extra_mass=None
@@ -275,7 +270,6 @@ def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs, extra_mass=None
                         mass=sys.mass, source="cummins", inputs=inputs, check=False,
                         extra_vars=extra, extra_coords=coords)
     hist.variables["mass"].attrs.update(_matrix_vars(sys)["mass"][2])
-    _set_dof_units(hist, sys.dofs)
     if sys.ss is not None:
         hist.attrs["radiation_ss"] = json.dumps(sys.ss.to_dict())
     return hist

@@ -76,7 +76,15 @@ SAWTOOTH_RATIO = 1.0
 
 
 class UnstablePartitionError(SolverError):
-    """The hybrid scheme is predicted unstable for this partition (pass force=True to run)."""
+    """The hybrid scheme is predicted unstable for this partition (pass force=True to run).
+
+    ``reason`` is the prediction alone, for callers that name their own override (the CLI's
+    ``--allow-unstable``).
+    """
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(f"{reason} (pass force=True to run anyway)")
+        self.reason = reason
 
 
 # ---------------------------------------------------------------------- batched physics
@@ -645,14 +653,14 @@ def rollout(
         raise InputError(f"cases have {n_total} samples; the network window needs more than {w}")
     prediction = None
     if check:
-        prediction = check_stability(net, hs if reference_for_check is None else reference_for_check, mass=mass, known=known,
-                                     dt=dt, mode=mode, scheme=scheme, corrections=corrections)
+        prediction = check_stability(net, hs if reference_for_check is None else reference_for_check,
+                                     mass=mass, known=known, dt=dt, mode=mode, scheme=scheme, corrections=corrections)
         if not prediction.stable:
             msg = (f"hybrid {mode} rollout predicted unstable: spectral radius "
                    f"{prediction.spectral_radius:.4f} > 1, |alpha_s|/(m+A_k) = "
                    f"{prediction.added_mass_ratio:.3f}")
             if not force:
-                raise UnstablePartitionError(msg + " (pass force=True / --force to run anyway)")
+                raise UnstablePartitionError(msg)
             warnings.warn("UNSTABLE PARTITION: " + msg, RuntimeWarning, stacklevel=2)
     phys = BatchedPhysics(mass, known, nd)
     stepper = _Stepper(phys, spec, dt, mode, _torch_force(net), scheme, max_iter, tol,
