@@ -482,6 +482,7 @@ class MooringTable:
         patches = np.stack([_bicubic_patches(l_h, l_v, dataset[name].values)
                             for name in ("horizontal_force", "vertical_force")], axis=2)
         flat = patches.reshape(self._n[0] * self._n[1], 32)  # cell -> (H 16, V 16)
+        self._cells_flat = np.ascontiguousarray(flat)  # (n_cells, 32): the compiled kernel
         self._cells_array = _Columns(np.ascontiguousarray(flat.T))  # (32, n_cells): batches
         self._cells_list = [tuple(row) for row in flat.tolist()]  # for single states
         # (anchor x, y, z, fairlead x, y, z): per line for one state, all lines at once as
@@ -489,6 +490,10 @@ class MooringTable:
         self._lines_each = [tuple(map(float, a)) + tuple(map(float, f))
                             for a, f in zip(lines.anchors, lines.fairleads)]
         self._lines_all = [tuple(np.concatenate([lines.anchors, lines.fairleads], axis=1).T)]
+        # one state through the Numba kernel when available (no Python per-line overhead)
+        self._single = self.compiled(list(range(6)), np.zeros(6))
+        self._out6 = np.empty(6)
+        self._no_rate = np.zeros(6)
 
     @classmethod
     def from_dataset(cls, dataset: xr.Dataset) -> MooringTable:
@@ -512,14 +517,37 @@ class MooringTable:
         """
         q = _as_states(q)
         if q.ndim == 1:
-            state = q.tolist()
-            f = self._wrench(state, _ScalarMath, self._cells_list, self._lines_each)
-            f[5] -= self.lines.yaw_spring * state[5]
-            return np.array(f)
+            return self._force6_one(q) if self._single is not None else self._force6_scalar(q)
+        if self._single is not None:
+            return self._force6_rows(q)
         f = np.stack(self._wrench(q.T[:, :, None], _ArrayMath, self._cells_array,
                                   self._lines_all), axis=-1)
         f[:, 5] -= self.lines.yaw_spring * q[:, 5]
         return f
+
+    def _force6_one(self, q: np.ndarray) -> np.ndarray:
+        """One state (6,) through the Numba kernel: the arithmetic of :meth:`_force6_scalar`."""
+        c = self._single
+        if c.kernel(0.0, np.ascontiguousarray(q), self._no_rate, self._out6, c.fdata, c.idata):
+            raise SolverError(_OUTSIDE)
+        return self._out6.copy()
+
+    def _force6_rows(self, q: np.ndarray) -> np.ndarray:
+        """A batch (n, 6) through the Numba kernel, row by row."""
+        from hybridwsi.forces._compiled import mooring_rows
+
+        c = self._single
+        out = np.empty(q.shape)
+        if mooring_rows(np.ascontiguousarray(q), out, c.fdata, c.idata):
+            raise SolverError(_OUTSIDE)
+        return out
+
+    def _force6_scalar(self, q: np.ndarray) -> np.ndarray:
+        """One state (6,) in Python floats (without Numba)."""
+        state = q.tolist()
+        f = self._wrench(state, _ScalarMath, self._cells_list, self._lines_each)
+        f[5] -= self.lines.yaw_spring * state[5]
+        return np.array(f)
 
     def _wrench(self, q: Any, xp: Any, cells: Any, lines: Any) -> list[Any]:
         """Sum over lines of the fairlead forces and their moments; ``q`` unpacks to 6 items.
@@ -561,6 +589,15 @@ class MooringTable:
             m3 += bx * fy - by * fx
         total = xp.total
         return [total(f1), total(f2), total(f3), total(m1), total(m2), total(m3)]
+
+    def compiled(self, index: Sequence[int], f0: np.ndarray) -> Any:
+        """Numba kernel of ``force6(q) − f0`` on the DOFs ``index`` of q, or None without Numba
+        (:mod:`hybridwsi.forces._compiled`; same arithmetic as the single-state path)."""
+        from hybridwsi.forces._compiled import mooring_force
+
+        return mooring_force(self._origin, self._step, self._n, self.lines.yaw_spring, f0,
+                             self.lines.anchors, self.lines.fairleads, self._cells_flat,
+                             [int(i) for i in index], _OUTSIDE)
 
     def preload(self) -> np.ndarray:
         """``F0 = F(0)`` from the table [N, N m], shape (6,)."""
@@ -642,6 +679,11 @@ class MooringForce(KnownComponent):
         self._check(n_dof)
         zero = np.zeros((n_dof, n_dof))
         return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
+
+    def compiled_force(self, n_dof: int) -> Any:
+        """Numba kernel of :meth:`ode_force` (the table's), or None without Numba."""
+        self._check(n_dof)
+        return self.table.compiled(self._index, self._f0)
 
     def describe(self) -> str:
         n_h, n_v = self.table.dataset.sizes["l_h"], self.table.dataset.sizes["l_v"]
