@@ -21,9 +21,13 @@ from hybridwsi.errors import SolverError
 from hybridwsi.forces._compiled import HAVE_NUMBA, CompiledForce, _kernel, numba, quiet
 
 
-def _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, t, y, u, dy, fs, f, tmp
-         ):  # pragma: no cover - compiled
-    """``dy = ẏ(t, y)``; ``fs`` the components' force. Returns (status, component)."""
+def _rhs(comps, mats, t, y, u, dy, fs, f, tmp):  # pragma: no cover - compiled
+    """``dy = ẏ(t, y)`` and ``fs`` the components' force; returns (status, component).
+
+    ``comps = (kernels, n_kernels, fdata, idata)``, ``mats = (M⁻¹, C, A_r, B_r, C_r)``.
+    """
+    kernels, n_kernels, fdata, idata = comps
+    minv, stiff, ar, br, cr = mats
     n = minv.shape[0]
     r = ar.shape[0]
     z = y[:n]
@@ -63,12 +67,18 @@ def _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, t, y, u, dy,
     return 0, -1
 
 
-def _loop(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, u_half, dt, y, f_comp
-          ):  # pragma: no cover - compiled
+def _stage(comps, mats, t, yk, h, slope, u, ys, dy, fs, f, tmp):  # pragma: no cover
+    """An RK4 stage: ``dy = ẏ(t, y_k + h slope)`` (``ys`` holds the stage state)."""
+    for i in range(yk.size):
+        ys[i] = yk[i] + h * slope[i]
+    return _rhs(comps, mats, t, ys, u, dy, fs, f, tmp)
+
+
+def _loop(comps, mats, u_half, dt, y, f_comp):  # pragma: no cover - compiled
     """RK4 over the rows of ``y`` (row 0 the initial state); returns (status, component, step)
     with status 0 (done), a kernel's code, or -1 (a non-finite state)."""
     nt, ns = y.shape
-    n = minv.shape[0]
+    n = mats[0].shape[0]
     k1, k2, k3, k4 = np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns)
     ys = np.empty(ns)
     fs, f, tmp, scratch = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -76,27 +86,17 @@ def _loop(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, u_half, dt,
     for k in range(nt - 1):
         tk = k * dt
         yk = y[k]
-        st, m = _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, tk, yk, u_half[2 * k],
-                     k1, fs, f, tmp)
-        if st != 0:
-            return st, m, k
-        f_comp[k] = fs
-        for i in range(ns):
-            ys[i] = yk[i] + h2 * k1[i]
-        st, m = _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, tk + h2, ys,
-                     u_half[2 * k + 1], k2, scratch, f, tmp)
-        if st != 0:
-            return st, m, k
-        for i in range(ns):
-            ys[i] = yk[i] + h2 * k2[i]
-        st, m = _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, tk + h2, ys,
-                     u_half[2 * k + 1], k3, scratch, f, tmp)
-        if st != 0:
-            return st, m, k
-        for i in range(ns):
-            ys[i] = yk[i] + dt * k3[i]
-        st, m = _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, tk + dt, ys,
-                     u_half[2 * k + 2], k4, scratch, f, tmp)
+        st, m = _rhs(comps, mats, tk, yk, u_half[2 * k], k1, fs, f, tmp)
+        if st == 0:
+            f_comp[k] = fs
+            st, m = _stage(comps, mats, tk + h2, yk, h2, k1, u_half[2 * k + 1], ys, k2,
+                           scratch, f, tmp)
+        if st == 0:
+            st, m = _stage(comps, mats, tk + h2, yk, h2, k2, u_half[2 * k + 1], ys, k3,
+                           scratch, f, tmp)
+        if st == 0:
+            st, m = _stage(comps, mats, tk + dt, yk, dt, k3, u_half[2 * k + 2], ys, k4,
+                           scratch, f, tmp)
         if st != 0:
             return st, m, k
         finite = True
@@ -107,12 +107,9 @@ def _loop(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, u_half, dt,
         if not finite:
             return -1, -1, k
     last = nt - 1
-    st, m = _rhs(kernels, n_kernels, fdata, idata, minv, stiff, ar, br, cr, last * dt, y[last],
-                 u_half[2 * last], k1, fs, f, tmp)
-    if st != 0:
-        return st, m, last
+    st, m = _rhs(comps, mats, last * dt, y[last], u_half[2 * last], k1, fs, f, tmp)
     f_comp[last] = fs
-    return 0, -1, last
+    return st, m, last
 
 
 def _nothing(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
@@ -128,6 +125,7 @@ MAX_KERNELS = 8
 
 if HAVE_NUMBA:
     _rhs = numba.njit(cache=True)(_rhs)
+    _stage = numba.njit(cache=True)(_stage)
     _loop = numba.njit(cache=True)(_loop)
     _nothing = _kernel(_nothing)
 
@@ -175,10 +173,10 @@ def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.nda
         pad = [CompiledForce(_nothing, np.zeros(0), np.zeros(0, dtype=np.int64))] * (
             MAX_KERNELS - len(forces))
         padded = list(forces) + pad
-        status, comp, step = _loop(tuple(f.kernel for f in padded), len(forces),
-                                   tuple(f.fdata for f in padded),
-                                   tuple(f.idata for f in padded), c(minv), c(stiffness),
-                                   c(ss_a), c(ss_b), c(ss_c), c(u_half), float(dt), y, f_comp)
+        comps = (tuple(f.kernel for f in padded), len(forces), tuple(f.fdata for f in padded),
+                 tuple(f.idata for f in padded))
+        mats = (c(minv), c(stiffness), c(ss_a), c(ss_b), c(ss_c))
+        status, comp, step = _loop(comps, mats, c(u_half), float(dt), y, f_comp)
     if status == -1:
         raise SolverError(f"RK4 integration diverged at t = {step * dt + dt:.6g} s; reduce dt")
     if status:

@@ -88,6 +88,52 @@ def quiet() -> Iterator[None]:
         yield
 
 
+def rotation_from(s1: Any, c1: Any, s2: Any, c2: Any, s3: Any, c3: Any) -> tuple:
+    """MoorPy's rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` from the sines and cosines of yaw (1),
+    pitch (2) and roll (3), as nested 3x3 tuples (floats or arrays alike)."""
+    return (
+        (c1 * c2, c1 * s2 * s3 - c3 * s1, s1 * s3 + c1 * c3 * s2),
+        (c2 * s1, c1 * c3 + s1 * s2 * s3, c3 * s1 * s2 - c1 * s3),
+        (-s2, c2 * s3, c2 * c3),
+    )
+
+
+def bicubic(c: Any, o: int, u: Any, v: Any) -> Any:
+    """``Σ_pq c[o + 4p + q] u^p v^q`` by Horner's rule (floats or arrays alike)."""
+    return ((c[o] + v * (c[o + 1] + v * (c[o + 2] + v * c[o + 3])))
+            + u * ((c[o + 4] + v * (c[o + 5] + v * (c[o + 6] + v * c[o + 7])))
+                   + u * ((c[o + 8] + v * (c[o + 9] + v * (c[o + 10] + v * c[o + 11])))
+                          + u * (c[o + 12] + v * (c[o + 13] + v * (c[o + 14] + v * c[o + 15]))))))
+
+
+def line_pull(horizontal: Any, vertical: Any, lh: Any, dx: Any, dy: Any, bx: Any, by: Any,
+              bz: Any) -> tuple:
+    """Force [N] and moment [N m] of one line on its fairlead at arm ``b`` from the reference
+    point, ``(fx, fy, fz, mx, my, mz)``; ``(dx, dy)`` the fairlead's horizontal offset from
+    the anchor, ``lh`` its length, ``horizontal``/``vertical`` the tabulated fairlead forces."""
+    towards = -horizontal / lh  # horizontal pull points from the fairlead to the anchor
+    fx, fy, fz = towards * dx, towards * dy, -vertical
+    return fx, fy, fz, by * fz - bz * fy, bz * fx - bx * fz, bx * fy - by * fx
+
+
+if HAVE_NUMBA:
+    _rotation = numba.njit(cache=True, inline="always")(rotation_from)
+    _bicubic = numba.njit(cache=True, inline="always")(bicubic)
+    _line_pull = numba.njit(cache=True, inline="always")(line_pull)
+
+
+def _rate(zdot, jac, k):  # pragma: no cover - compiled
+    """``−J_k ż``: minus the velocity of strip k along one axis [m/s]."""
+    s = 0.0
+    for i in range(zdot.size):
+        s += zdot[i] * jac[k, i]
+    return -s
+
+
+if HAVE_NUMBA:
+    _rate = numba.njit(cache=True, inline="always", fastmath=True)(_rate)
+
+
 # ------------------------------------------------------------------------------- linear
 def _linear(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     # fdata = [B (n×n, row-major), C (n×n)]: out = −B ż − C z (KnownComponent.ode_force)
@@ -127,13 +173,10 @@ def _mooring(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     lines0 = 11
     cells0 = lines0 + 6 * n_lines
     x0, y0, z0, roll, pitch, yaw = q[0], q[1], q[2], q[3], q[4], q[5]
-    s1, c1 = math.sin(yaw), math.cos(yaw)
-    s2, c2 = math.sin(pitch), math.cos(pitch)
-    s3, c3 = math.sin(roll), math.cos(roll)
-    r00, r01, r02 = c1 * c2, c1 * s2 * s3 - c3 * s1, s1 * s3 + c1 * c3 * s2
-    r10, r11, r12 = c2 * s1, c1 * c3 + s1 * s2 * s3, c3 * s1 * s2 - c1 * s3
-    r20, r21, r22 = -s2, c2 * s3, c2 * c3
-    f1 = f2 = f3 = m1 = m2 = m3 = 0.0
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = _rotation(
+        math.sin(yaw), math.cos(yaw), math.sin(pitch), math.cos(pitch), math.sin(roll),
+        math.cos(roll))
+    full = np.zeros(6)  # force [N] and moment [N m] of all lines
     for m in range(n_lines):
         o = lines0 + 6 * m
         ax, ay, az = fdata[o], fdata[o + 1], fdata[o + 2]
@@ -150,25 +193,11 @@ def _mooring(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
         i, j = min(int(x), nh - 1), min(int(y), nv - 1)
         u, v = x - i, y - j
         a = cells0 + 32 * (i * nv + j)
-        b = a + 16
-        horizontal = ((fdata[a] + v * (fdata[a + 1] + v * (fdata[a + 2] + v * fdata[a + 3])))
-                      + u * ((fdata[a + 4] + v * (fdata[a + 5] + v * (fdata[a + 6] + v * fdata[a + 7])))
-                             + u * ((fdata[a + 8] + v * (fdata[a + 9] + v * (fdata[a + 10] + v * fdata[a + 11])))
-                                    + u * (fdata[a + 12] + v * (fdata[a + 13] + v * (fdata[a + 14] + v * fdata[a + 15]))))))
-        fz = -((fdata[b] + v * (fdata[b + 1] + v * (fdata[b + 2] + v * fdata[b + 3])))
-               + u * ((fdata[b + 4] + v * (fdata[b + 5] + v * (fdata[b + 6] + v * fdata[b + 7])))
-                      + u * ((fdata[b + 8] + v * (fdata[b + 9] + v * (fdata[b + 10] + v * fdata[b + 11])))
-                             + u * (fdata[b + 12] + v * (fdata[b + 13] + v * (fdata[b + 14] + v * fdata[b + 15]))))))
-        towards = -horizontal / lh  # horizontal pull points from the fairlead to the anchor
-        fx, fy = towards * dx, towards * dy
-        f1 += fx
-        f2 += fy
-        f3 += fz
-        m1 += by * fz - bz * fy
-        m2 += bz * fx - bx * fz
-        m3 += bx * fy - by * fx
-    m3 -= yaw_spring * q[5]
-    full = (f1, f2, f3, m1, m2, m3)
+        pull = _line_pull(_bicubic(fdata, a, u, v), _bicubic(fdata, a + 16, u, v), lh, dx, dy,
+                          bx, by, bz)
+        for d in range(6):
+            full[d] += pull[d]
+    full[5] -= yaw_spring * q[5]
     for i in range(n_dof):
         k = idata[4 + i]
         out[i] = full[k] - fdata[5 + k]
@@ -235,17 +264,11 @@ def _morison(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     for i in range(n):
         out[i] = 0.0
     for k in range(ns):
-        ux = 0.0
-        for i in range(n):
-            ux += zdot[i] * jx[k, i]
-        ux = -ux
+        ux = _rate(zdot, jx, k)
         if nc > 0:
             ux += speed[k] * cb
         if two_d:
-            uy = 0.0
-            for i in range(n):
-                uy += zdot[i] * jy[k, i]
-            uy = -uy
+            uy = _rate(zdot, jy, k)
             if nc > 0:
                 uy += speed[k] * sb
             w = coef[k] * math.hypot(ux, uy)

@@ -217,14 +217,10 @@ def rotation_matrix(roll: Any, pitch: Any, yaw: Any, xp: Any = np) -> Any:
 
     Entries are floats (``xp=math``) or arrays (``xp=numpy``) of the same shape as the angles.
     """
-    s1, c1 = xp.sin(yaw), xp.cos(yaw)
-    s2, c2 = xp.sin(pitch), xp.cos(pitch)
-    s3, c3 = xp.sin(roll), xp.cos(roll)
-    return (
-        (c1 * c2, c1 * s2 * s3 - c3 * s1, s1 * s3 + c1 * c3 * s2),
-        (c2 * s1, c1 * c3 + s1 * s2 * s3, c3 * s1 * s2 - c1 * s3),
-        (-s2, c2 * s3, c2 * c3),
-    )
+    from hybridwsi.forces._compiled import rotation_from  # one formula with the kernel
+
+    return rotation_from(xp.sin(yaw), xp.cos(yaw), xp.sin(pitch), xp.cos(pitch), xp.sin(roll),
+                         xp.cos(roll))
 
 
 def _as_states(q: Any) -> np.ndarray:
@@ -555,6 +551,8 @@ class MooringTable:
         Written once for floats and for arrays (``xp``); kept flat because the single-state
         call sits inside the ODE right-hand side.
         """
+        from hybridwsi.forces._compiled import bicubic, line_pull  # one formula with the kernel
+
         x0, y0, z0, roll, pitch, yaw = q
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_matrix(roll, pitch, yaw, xp)
         (h0, v0), (dh, dv), (nh, nv) = self._origin, self._step, self._n
@@ -567,26 +565,15 @@ class MooringTable:
             dx, dy, dz = bx + x0 - ax, by + y0 - ay, bz + z0 - az
             lh = hypot(dx, dy)
             k, u, v = locate((lh - h0) / dh, (dz - v0) / dv, nh, nv)
-            (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
-             b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15
-             ) = cells[k]
-            # bicubic sum c_pq u^p v^q by Horner's rule: horizontal (a) and vertical (b) force
-            horizontal = ((a0 + v * (a1 + v * (a2 + v * a3)))
-                          + u * ((a4 + v * (a5 + v * (a6 + v * a7)))
-                                 + u * ((a8 + v * (a9 + v * (a10 + v * a11)))
-                                        + u * (a12 + v * (a13 + v * (a14 + v * a15))))))
-            fz = -((b0 + v * (b1 + v * (b2 + v * b3)))
-                   + u * ((b4 + v * (b5 + v * (b6 + v * b7)))
-                          + u * ((b8 + v * (b9 + v * (b10 + v * b11)))
-                                 + u * (b12 + v * (b13 + v * (b14 + v * b15))))))
-            towards = -horizontal / lh  # horizontal pull points from the fairlead to the anchor
-            fx, fy = towards * dx, towards * dy
+            c = cells[k]  # bicubic coefficients: horizontal 0-15, vertical 16-31
+            fx, fy, fz, mx, my, mz = line_pull(bicubic(c, 0, u, v), bicubic(c, 16, u, v), lh,
+                                               dx, dy, bx, by, bz)
             f1 += fx
             f2 += fy
             f3 += fz
-            m1 += by * fz - bz * fy
-            m2 += bz * fx - bx * fz
-            m3 += bx * fy - by * fx
+            m1 += mx
+            m2 += my
+            m3 += mz
         total = xp.total
         return [total(f1), total(f2), total(f3), total(m1), total(m2), total(m3)]
 
