@@ -16,6 +16,10 @@ The same objects enter the ODE of the reconstruction (paper Eq. 4) and the stabi
   state; ``x`` are the component's internal states (``n_states`` of them, e.g. a radiation
   state-space realisation), whose derivative is ``state_derivative(t, z, zdot, x)``.
 
+Optionally, ``compiled_force(n_dof)`` gives a Numba kernel of ``ode_force`` that the stepping
+solver's compiled RK4 loop calls (:mod:`hybridwsi.forces._compiled`); without one the solver
+runs its NumPy loop.
+
 Subclass :class:`KnownComponent` for new physics; the built-ins live beside this module
 (:mod:`hybridwsi.forces.linear`, :mod:`hybridwsi.forces.radiation`).
 """
