@@ -153,7 +153,7 @@ linear_kernel = _kernel(_linear)
 
 
 def linear_force(b: np.ndarray, c: np.ndarray) -> CompiledForce | None:
-    """``F = −B ż − C z`` [N, N m] with constant (n, n) matrices (the default ``ode_force``)."""
+    """``F = −B ż − C z`` [N, N m], constant (n, n) matrices (the default ``ode_force``)."""
     if not HAVE_NUMBA:
         return None
     return CompiledForce(linear_kernel, _floats(b, c), np.zeros(0, dtype=np.int64))
