@@ -14,7 +14,7 @@ summation order only, ~1e-16 relative; the tests compare both paths).
 :func:`hybridwsi.cummins.compiled.run_rk4` calls the kernels through Numba's first-class
 function type, so the loop is compiled once (cached on disk) for any mix of components.
 
-Without Numba (``pip install numba``, part of the ``ml`` extra) :data:`HAVE_NUMBA` is False,
+Without Numba (a core dependency, but the code runs without it) :data:`HAVE_NUMBA` is False,
 every ``compiled_force`` returns None and the stepping solver keeps its NumPy path.
 """
 
