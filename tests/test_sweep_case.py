@@ -180,8 +180,41 @@ def test_sweep_command_with_a_case(tmp_path, capsys):
     assert float(ds["time"][-1]) == pytest.approx(20.0) and float(ds["time"][1]) == 0.1
     settings = json.loads((out / "manifest.json").read_text())["settings"]
     assert settings["case"] == "oc3_hywind" and settings["wave_components"] == 200
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert sweep.sweep_coefficients(manifest).attrs["input_hash"] == settings["coeffs_hash"]
     for bad in (["--mass", "5e6"], ["--nonlinear-hydrostatics"], ["--case", "nope"]):
         assert main(argv[:-2] + bad + ["--out", str(tmp_path / "bad")]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and err.startswith("error:"), err
     assert not (tmp_path / "bad").exists()
+
+
+def test_heave_statistics_match_the_frequency_domain(tmp_path):
+    """Heave of the spar is decoupled from surge/pitch and untouched by the transverse drag:
+    over one repeat period of the sea (after the ramp) the sweep's std must equal the
+    frequency-domain spectral sum Σ ½ |X(ω_j) a_j|², X from A(ω), B(ω), C + K33, B_add."""
+    from hybridwsi.report.fowt import frequency_response
+    from hybridwsi.waves import Regular, excitation_force
+
+    hs, tp, ramp = 6.0, 10.0, 60.0
+    comp = JONSWAP(hs=hs, tp=tp, seed=0, n_components=200).components()
+    repeat = 2.0 * np.pi / (comp.omega[1] - comp.omega[0])  # the sea's period, 571 s
+    cfg = SweepConfig.for_case("oc3_hywind", duration=round(ramp + repeat, 1), dt=0.1,
+                               ramp=ramp, dofs="heave", gamma=3.3, wave_components=200)
+    sweep.run_sweep(sweep.case_grid([hs], [tp], 1), tmp_path, cfg, scheduler="synchronous",
+                    progress=False)
+    stats = json.loads((tmp_path / "manifest.json").read_text())["statistics"]
+    std_td = stats["cases"]["hs6_tp10_s0"]["Heave"]["std"]
+
+    spec, dofs = load_case("oc3_hywind"), ["Heave"]
+    coeffs = sweep.case_coefficients(spec)
+    k33 = MooringSystem.from_case(spec).stiffness()[2:3, 2:3]  # MoorPy's analytic K33
+    b_add = additional_damping(spec, dofs).linear_coefficients(1)[1]
+    var, t0 = 0.0, np.zeros(1)
+    for w, a in zip(comp.omega, comp.amplitude):  # F̂ of a unit-amplitude wave, e^{iωt}
+        unit = Regular(period=2.0 * np.pi / w, height=2.0)
+        f_hat = (excitation_force(unit, coeffs, t0, dofs)[0]
+                 - 1j * excitation_force(unit, coeffs, t0 + 0.5 * np.pi / w, dofs)[0])
+        var += 0.5 * (abs(frequency_response(coeffs, w, f_hat, k33, b_add, dofs)[0]) * a) ** 2
+    assert std_td == pytest.approx(np.sqrt(var), rel=2e-3)
+    assert stats["cases"]["hs6_tp10_s0"]["eta"]["hs_4std"] == pytest.approx(hs, rel=0.02)

@@ -246,6 +246,19 @@ def case_coefficients(spec: dict) -> xr.Dataset:
         return bem.compute(**bem_arguments(spec), progress=False)
 
 
+def sweep_coefficients(manifest: dict) -> xr.Dataset:
+    """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
+    was given, else its case's (:func:`case_coefficients`), else the paper sphere's."""
+    from hybridwsi.cases import load_case
+
+    cfg = manifest.get("config", {})
+    if cfg.get("coeffs"):
+        return load_coefficients(cfg["coeffs"])
+    if cfg.get("case"):
+        return case_coefficients(load_case(cfg["case"]))
+    return load_coefficients()
+
+
 def case_forces(spec: dict, dofs: Sequence[str], *, wave: Any = None, ramp: float = 0.0,
                 mooring_table: Any = None) -> list:
     """The force components of a case on ``dofs`` (each present only if the case has it).
