@@ -387,6 +387,12 @@ BAD_OPTIONS: dict[str, list[str]] = {
     "sweep-mass-neg": ["sweep", "--hs", "0.1", "--tp", "1", "--mass", "-1", "--out", "{out}/s"],
     "sweep-dofs-surge": ["sweep", "--hs", "0.1", "--tp", "1", "--dofs", "Surge", "--out",
                          "{out}/s"],
+    "sweep-case-unknown": ["sweep", "--case", "nope", "--hs", "1", "--tp", "10", "--out",
+                           "{out}/s"],
+    "sweep-case-with-mass": ["sweep", "--case", "oc3_hywind", "--hs", "1", "--tp", "10",
+                             "--mass", "5", "--out", "{out}/s"],
+    "sweep-no-kinematics-without-case": ["sweep", "--hs", "0.1", "--tp", "1",
+                                         "--no-wave-kinematics", "--out", "{out}/s"],
     "sweep-out-file": ["sweep", "--hs", "0.1", "--tp", "1", "--out", "good_force.csv"],
     # hybrid
     "hybrid-hidden-abc": ["hybrid", "good_hist.nc", "good_hist2.nc", "--hidden", "abc", "--out",

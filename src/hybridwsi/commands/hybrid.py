@@ -25,7 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="sweep folder / sweep.zarr, or history NetCDF files")
     o.add_out(p, "output folder (network.pt, network.json, report.json)", required=True,
               metavar="DIR")
-    o.add_coeffs(p, "default: from the sweep manifest, else the paper sphere's")
+    o.add_coeffs(p, "default: from the sweep manifest (its file or its case), else the "
+                      "paper sphere's")
     o.add_dofs(p, "the DOFs of the histories to use (default: all of them)")
     p.add_argument("--partition", default="recommended",
                    choices=["recommended", "added_mass_to_network"],
@@ -134,10 +135,10 @@ def run(args: argparse.Namespace) -> int:
         coeffs = read_coefficients(args.coeffs, assume_seawater=True)
     elif manifest and manifest["config"].get("coeffs"):
         coeffs = read_coefficients(manifest["config"]["coeffs"], assume_seawater=True)
-    else:
-        from hybridwsi.sweep import load_coefficients
+    else:  # a --case sweep's coefficients, else the paper sphere's
+        from hybridwsi.sweep import sweep_coefficients
 
-        coeffs = load_coefficients()
+        coeffs = sweep_coefficients(manifest or {})
     mass = mass_from(hists[0], coeffs)
     if mass is None:
         raise InputError("neither the histories nor the coefficients carry a 'mass'")
