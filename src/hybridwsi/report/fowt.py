@@ -46,6 +46,7 @@ from hybridwsi.history import mean_crossing_period
 from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
+from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
 from hybridwsi.report.plots import save
 from hybridwsi.waves import Regular, excitation_force
 
@@ -304,11 +305,14 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False) -> str:
     save(fig, folder / "rao.png")
     ds.to_netcdf(folder / "rao.nc")
     log("RAOs")
-    return fowt_markdown(mooring, nat, points, time.time() - start)
+    hybrid_dofs = case["hybrid"]["dofs"]
+    hybrid_md = run_fowt_hybrid(folder, case, coeffs, *linear_forces(case, k6, hybrid_dofs),
+                                write_json=_write_json, quick=quick, log=log)
+    return fowt_markdown(mooring, nat, points, time.time() - start, hybrid_md)
 
 
 def fowt_markdown(mooring: dict[str, Any], nat: dict[str, Any],
-                  points: Sequence[dict[str, Any]], wall: float) -> str:
+                  points: Sequence[dict[str, Any]], wall: float, hybrid_md: str = "") -> str:
     """The report section."""
     k = np.asarray(mooring["K"])
     ref = mooring["reference"]
@@ -329,5 +333,5 @@ def fowt_markdown(mooring: dict[str, Any], nat: dict[str, Any],
               f"steady state vs the frequency-domain solution of the same linear system, "
               f"largest difference {100 * worst:.3f} %.", "",
               "![decays](fowt/decay.png)", "", "![RAOs](fowt/rao.png)", "",
-              f"Section wall time {wall:.0f} s.", ""]
+              hybrid_md, f"Section wall time {wall:.0f} s.", ""]
     return "\n".join(lines)
