@@ -265,25 +265,35 @@ def diagnostic_markdown(diag: Mapping[str, Any], observed: Mapping[str, bool] | 
                         ) -> str:
     """The multi-DOF Table-1 analogue and the hand-over table."""
     observed = dict(observed or {})
-    acc = next(iter(diag["partitions"][0]["identifiable"]))
+    accs = list(diag["partitions"][0]["identifiable"])
+
+    def ident(r: Mapping[str, Any], key: str) -> str:
+        """Identifiable DOFs (or the coupling) at each stated accuracy, '/'-separated."""
+        out = []
+        for acc in accs:
+            v = r["identifiable"][acc]
+            out.append(("yes" if v[key] else "no") if key == "surge_pitch_coupling" else
+                       (", ".join(d for d, ok in v["per_dof"].items() if ok) or "none"))
+        return " / ".join(out)
+
     lines = ["### Diagnostic in several DOFs (surge, heave, pitch)", "",
              f"JONSWAP Hs {diag['history']['sea']['hs']} m, Tp {diag['history']['sea']['tp']} s, "
              f"{diag['history']['duration_s']:.0f} s, Δt {diag['history']['dt']} s; "
              f"ρ(M⁻¹A∞) = {diag['rho_M_inv_A_inf']:.3f} (surge alone A11/M11 = "
              f"{diag['added_mass_inf'][0][0] / diag['mass'][0][0]:.3f}).", "",
              "| partition | α diag [kg, kg, kg m²] | α surge–pitch [kg m] | γ diag [N/m, N/m, "
-             f"N m/rad] | R² min | identifiable per DOF at {acc} | surge–pitch | ρ((M+A_k)⁻¹α) "
+             f"N m/rad] | R² min | identifiable DOFs at {' / '.join(accs)} | surge–pitch "
+             "coupling | ρ((M+A_k)⁻¹α) "
              "| lagged | observed |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in diag["partitions"]:
         a, g = np.asarray(r["alpha"]), np.asarray(r["gamma"])
-        ident = r["identifiable"][acc]
         obs = r.get("observed", {}).get("observed_stable", observed.get(r["partition"]))
         obs_s = "—" if obs is None else ("stable" if obs else "unstable")
         lines.append(
             f"| {r['partition']} | {a[0, 0]:.4g}, {a[1, 1]:.4g}, {a[2, 2]:.4g} | "
             f"{a[0, 2]:.4g} / {a[2, 0]:.4g} | {g[0, 0]:.4g}, {g[1, 1]:.4g}, {g[2, 2]:.4g} | "
-            f"{min(r['r2']):.4f} | {', '.join(d for d, ok in ident['per_dof'].items() if ok) or 'none'} | "
-            f"{'yes' if ident['surge_pitch_coupling'] else 'no'} | {r['added_mass_ratio']:.4f} | "
+            f"{min(r['r2']):.4f} | {ident(r, 'per_dof')} | {ident(r, 'surge_pitch_coupling')} | "
+            f"{r['added_mass_ratio']:.4f} | "
             f"{r['lagged_verdict']} | {obs_s} |")
     lines += ["", "| partition | left to the network | goes to | reason |", "|---|---|---|---|"]
     for r in diag["partitions"]:

@@ -34,8 +34,10 @@ from hybridwsi.report.plots import save
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.rollout import check_stability, corrections_for, rollout
 
-#: error growth (last third over middle third of a held-out rollout) that counts as unstable
-GROWTH_LIMIT = 2.0
+#: rollout error [% of the reference RMS, any DOF] above which a run that did not blow up still
+#: counts as unstable: a growing mode held bounded only by the network's saturation (an
+#: uncorrelated response of the right size would give ~141 %)
+DIVERGED_PERCENT = 100.0
 
 def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
     """RMS of (hybrid − reference) z per DOF over the hybrid's times, in % of the reference's
@@ -47,20 +49,6 @@ def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
         return [float("inf")] * z.shape[1]
     err = np.sqrt(np.mean((z - z_ref) ** 2, axis=0))
     return (100.0 * err / np.sqrt(np.mean(z_ref ** 2, axis=0))).tolist()
-
-
-def error_growth(hist: xr.Dataset, ref: xr.Dataset) -> float:
-    """RMS error of z over the last third of the rollout over that of the middle third, worst
-    DOF (inf when not finite): > :data:`GROWTH_LIMIT` means a growing error, even when the
-    network's saturation keeps it below the rollout's blow-up threshold."""
-    t = hist["time"].values
-    err = hist["z"].values - ref["z"].sel(time=t, method="nearest").values
-    n = len(t) // 3
-    with np.errstate(invalid="ignore", over="ignore"):
-        mid = np.sqrt(np.mean(err[n:2 * n] ** 2, axis=0))
-        last = np.sqrt(np.mean(err[2 * n:] ** 2, axis=0))
-        ratio = np.max(last / np.maximum(mid, 1e-300))
-    return float(ratio) if np.isfinite(ratio) else float("inf")
 
 
 def run_partition(name: str, known: Sequence[KnownComponent], net_kw: Mapping[str, Any],
@@ -97,11 +85,10 @@ def run_partition(name: str, known: Sequence[KnownComponent], net_kw: Mapping[st
                     "alpha_s": np.asarray(pred.alpha_s).tolist(),
                     "predicted_stable": bool(pred.stable),
                     "blew_up": res.blew_up.tolist(),
-                    "error_growth": [error_growth(r, h) for r, h in zip(res.histories, test)],
                     "rollout_error_percent_rms": [dict(zip(_dofs(h), nrms_percent(r, h)))
                                                   for r, h in zip(res.histories, test)]}
-        entry[m]["observed_stable"] = bool(not res.blew_up.any() and max(
-            entry[m]["error_growth"]) <= GROWTH_LIMIT)
+        worst = max(max(c.values()) for c in entry[m]["rollout_error_percent_rms"])
+        entry[m]["observed_stable"] = bool(not res.blew_up.any() and worst <= DIVERGED_PERCENT)
         entry[m]["agree"] = entry[m]["predicted_stable"] == entry[m]["observed_stable"]
         if m == mode:
             res_mode = res
@@ -174,11 +161,10 @@ def rollout_figure(hybrid: xr.Dataset, ref: xr.Dataset, title: str
 
 
 def _observed(e: Mapping[str, Any]) -> str:
-    """'stable', 'blew up' or 'error grows ×g' for one rollout entry."""
+    """'stable', 'blew up' or 'diverged' (error > DIVERGED_PERCENT) for one rollout entry."""
     if any(e["blew_up"]):
         return "blew up"
-    growth = max(g if g is not None else float("inf") for g in e["error_growth"])
-    return "stable" if e["observed_stable"] else f"error grows ×{growth:.3g}"
+    return "stable" if e["observed_stable"] else "diverged"
 
 
 def hybrid_markdown(hyb: Mapping[str, Any]) -> str:
@@ -187,8 +173,8 @@ def hybrid_markdown(hyb: Mapping[str, Any]) -> str:
     lines = ["### Hybrid (network in the loop), held-out seas", "",
              f"Networks {hyb['settings']['network']['hidden']} ({mode} rollouts, Δt "
              f"{hyb['settings']['dt']} s); error = RMS(z_hybrid − z_ref) in % of RMS z_ref, "
-             "worst held-out sea; observed unstable = blew up, or the error's RMS over the last "
-             f"third > {GROWTH_LIMIT:g}× that over the middle third.", "",
+             "worst held-out sea; observed unstable = blew up (|z| > 20× the reference or a "
+             f"saw-tooth z̈), or diverged (error > {DIVERGED_PERCENT:g} % on a DOF).", "",
              "| partition | coupling | ρ((M+A_k)⁻¹α_s) | spectral radius | predicted | observed "
              "| surge % | heave % | pitch % |", "|---|---|---|---|---|---|---|---|---|"]
     for p in hyb["partitions"]:
