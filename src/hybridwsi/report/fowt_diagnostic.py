@@ -52,7 +52,6 @@ from hybridwsi.forces import (
 from hybridwsi.forces.external import PrescribedForce
 from hybridwsi.forces.linear import known_from
 from hybridwsi.forces.morison import MorisonDrag
-from hybridwsi.hydro import coefficients as co
 from hybridwsi.waves import JONSWAP
 
 #: growth of the lagged run's error over its initial perturbation that counts as "blew up"
@@ -127,10 +126,10 @@ def expected_coefficients(hist: xr.Dataset, known: Sequence[KnownComponent]
         return None
     n = hist.sizes["dof"]
     a_k, b_k, c_k = summed_linear_coefficients(list(known), n)
-    return co_mass(hist) + a_k, b_k, c_k
+    return rigid_mass(hist) + a_k, b_k, c_k
 
 
-def co_mass(hist: xr.Dataset) -> np.ndarray:
+def rigid_mass(hist: xr.Dataset) -> np.ndarray:
     """The rigid-body mass matrix M [kg, kg m, kg m²] the history carries."""
     return np.asarray(hist["mass"].values, dtype=float)
 
@@ -149,7 +148,7 @@ def lagged_linear_run(hist: xr.Dataset, known: Sequence[KnownComponent], reg: An
     z_r, v_r, a_r = (np.asarray(hist[k].values, float) for k in ("z", "zdot", "zddot"))
     t = np.asarray(hist["time"].values, float)
     n = z_r.shape[1]
-    m = co_mass(hist)
+    m = rigid_mass(hist)
     a_k, b_k, c_k = summed_linear_coefficients(list(known), n)
     f_bb = black_box_force(hist, "F_tot", list(known))
     remainder = f_bb - a_r @ reg.alpha.T - v_r @ reg.beta.T - z_r @ reg.gamma.T
@@ -194,7 +193,7 @@ def partition_entry(name: str, hist: xr.Dataset, known: Sequence[KnownComponent]
         warnings.simplefilter("ignore")
         regs = [regress(hist, "F_tot", list(known), force_accuracy=acc) for acc in accuracies]
     reg = regs[0]
-    m = co_mass(hist)
+    m = rigid_mass(hist)
     a_k, b_k, c_k = summed_linear_coefficients(list(known), len(dofs))
     lag = stability.loosely_coupled_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta, reg.gamma,
                                               dt, scheme)
@@ -253,10 +252,10 @@ def diagnostic(histories: Sequence[xr.Dataset], mooring_linear: KnownComponent,
         r["where"], r["reason"] = verdict_line(r)
     return {"history": {"sea": cfg["train"][0], "duration_s": float(hist["time"][-1]),
                         "dt": float(cfg["dt"]), "dofs": list(cfg["dofs"])},
-            "mass": co_mass(hist).tolist(),
+            "mass": rigid_mass(hist).tolist(),
             "added_mass_inf": np.asarray(hist["added_mass_inf"].values).tolist(),
             "rho_M_inv_A_inf": stability.added_mass_ratio(
-                co_mass(hist), np.zeros_like(co_mass(hist)),
+                rigid_mass(hist), np.zeros_like(rigid_mass(hist)),
                 np.asarray(hist["added_mass_inf"].values)),
             "partitions": rows}
 

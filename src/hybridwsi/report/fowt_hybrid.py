@@ -231,7 +231,7 @@ def run_fowt_hybrid(folder: Path, case: Mapping[str, Any], coeffs: xr.Dataset,
     write_json(folder / "diagnostic.json", json_safe(diag))
     log("diagnostic.json")
 
-    mass = fd.co_mass(train[0])
+    mass = fd.rigid_mass(train[0])
     parts = fd.partitions(train[0], mooring_linear, damping)
     entries, nets, shown = [], {}, None
     for name, own in cfg["partitions"].items():
