@@ -4,9 +4,15 @@ The run: the shipped Capytaine coefficients, the radiation state space, the tabu
 nonlinear MoorPy mooring (``MooringForce``), Morison strip drag with the wave particle velocity
 (``MorisonDrag``, 120 strips, Cd 0.6) and the additional linear damping, in a JONSWAP sea
 (Hs 6 m, Tp 10 s, γ 3.3, 100 components), dt 0.1 s, RK4 (``cummins.simulate``'s stepping
-solver). Prints simulated time / wall time (target ≥ 1000× real time). Baseline in the same
-process: the same run with the mooring as its linearised stiffness only and no drag (still the
-stepping solver, since the stiffness is passed as a force component). Best of ``--repeat``.
+solver: its Numba loop when Numba is installed, :mod:`hybridwsi.cummins.compiled`). Prints
+simulated time / wall time (target ≥ 1000× real time). The radiation state space is fitted once
+for the body (its time is printed; as ``hybridwsi.sweep`` does, every run reuses it) and the
+Numba code is compiled (or loaded from its disk cache) by a short warm-up run, both outside
+the timing; the ratio with the fit inside is printed too.
+In the same process: the same run with the mooring as its linearised stiffness only and no
+drag (still the stepping solver, since the stiffness is passed as a force component), and the
+nonlinear run again on the NumPy loop (``solvers.COMPILED = False``; ``--no-numpy`` skips it)
+with the largest difference between the two paths. Best of ``--repeat``.
 Run: ``python benchmarks/bench_fowt.py [--duration 3600] [--dt 0.1]``.
 """
 
@@ -18,8 +24,9 @@ import time
 import numpy as np
 
 from hybridwsi.cases import load_case
-from hybridwsi.cummins import simulate
+from hybridwsi.cummins import build_system, simulate, solvers
 from hybridwsi.forces import MooringForce, MorisonDrag
+from hybridwsi.forces._compiled import HAVE_NUMBA
 from hybridwsi.report.fowt import DOFS, linear_forces, oc3_coefficients
 from hybridwsi.waves import JONSWAP
 
@@ -38,6 +45,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--duration", type=float, default=3600.0, help="simulated time [s]")
     parser.add_argument("--dt", type=float, default=0.1, help="time step [s]")
     parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-loop run")
     args = parser.parse_args(argv)
 
     case = load_case("oc3_hywind")
@@ -46,7 +54,11 @@ def main(argv: list[str] | None = None) -> None:
     mooring = MooringForce.from_case(case, list(DOFS))
     linear = linear_forces(case, mooring.table.stiffness())  # [−K z, B_add]
     drag = MorisonDrag.from_case(case, list(DOFS), wave=wave, ramp=60.0)
-    kw = dict(dofs=DOFS, duration=args.duration, dt=args.dt, wave=wave, ramp=60.0)
+    t0 = time.perf_counter()
+    ss = build_system(coeffs, dofs=DOFS, dt=args.dt).ss
+    t_fit = time.perf_counter() - t0
+    kw = dict(dofs=DOFS, duration=args.duration, dt=args.dt, wave=wave, ramp=60.0,
+              radiation_ss=ss)
 
     def nonlinear():
         return simulate(coeffs, forces=[mooring, drag, linear[1]], **kw)
@@ -54,17 +66,38 @@ def main(argv: list[str] | None = None) -> None:
     def baseline():
         return simulate(coeffs, forces=linear, **kw)
 
+    t0 = time.perf_counter()
+    simulate(coeffs, forces=[mooring, drag, linear[1]], **dict(kw, duration=10 * args.dt))
+    t_warm = time.perf_counter() - t0
+    print(f"loop: {'Numba (compiled)' if HAVE_NUMBA and solvers.COMPILED else 'NumPy'}; "
+          f"radiation fit (order {ss.order}) {t_fit:.2f} s, warm-up (compile or cache load) "
+          f"{t_warm:.2f} s, both once per process")
     wall_nl, hist_nl = _best_wall(nonlinear, args.repeat)
     wall_lin, hist_lin = _best_wall(baseline, args.repeat)
-    for name, wall, hist in (("nonlinear mooring + Morison drag", wall_nl, hist_nl),
-                             ("baseline: linear mooring only", wall_lin, hist_lin)):
+    runs = [("nonlinear mooring + Morison drag", wall_nl, hist_nl),
+            ("baseline: linear mooring only", wall_lin, hist_lin)]
+    if not args.no_numpy:
+        solvers.COMPILED = False
+        try:
+            wall_np, hist_np = _best_wall(nonlinear, args.repeat)
+        finally:
+            solvers.COMPILED = True
+        runs.append(("nonlinear, NumPy loop", wall_np, hist_np))
+    for name, wall, hist in runs:
         z = hist["z"].values
         print(f"{name:34s} {args.duration:.0f} s simulated in {wall:7.2f} s wall: "
               f"{args.duration / wall:7.0f}x real time; std surge {z[:, 0].std():.3f} m, "
               f"heave {z[:, 1].std():.3f} m, pitch {z[:, 2].std():.5f} rad")
+    print(f"nonlinear with the radiation fit inside the timing: "
+          f"{args.duration / (wall_nl + t_fit):.0f}x real time")
     diff = np.abs(hist_nl["z"].values - hist_lin["z"].values).max(axis=0)
     print("largest difference nonlinear - linear: " + ", ".join(
         f"{d} {v:.4g} {'rad' if d == 'Pitch' else 'm'}" for d, v in zip(DOFS, diff)))
+    if not args.no_numpy:
+        rel = max(np.abs(hist_nl[v].values - hist_np[v].values).max()
+                  / np.abs(hist_np[v].values).max() for v in ("z", "zdot", "F_tot"))
+        print(f"Numba vs NumPy loop: {wall_np / wall_nl:.1f}x faster, largest difference "
+              f"{rel:.1e} of each variable's range (z, zdot, F_tot)")
     print(f"cost of the nonlinear forces: {wall_nl / wall_lin:.2f}x the linear baseline "
           f"(steps {int(args.duration / args.dt)}, dt {args.dt} s)")
 

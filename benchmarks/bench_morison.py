@@ -6,7 +6,9 @@ Surge/Heave/Pitch in still water (the 3-DOF head-sea model) and all 6 DOFs with 
 velocity of a JONSWAP sea (100 components, 30° off the x axis). The baseline, measured in the
 same process, is the same formula written as a Python loop over strips (and wave components,
 their cosines computed once per state), one state at a time, as one would write it without
-NumPy. Best of ``--repeat`` runs each, so a
+NumPy. The Numba kernel the compiled RK4 loop calls (``MorisonDrag.compiled_force``) is timed
+on single states too (called from Python, so the call overhead is included). Best of
+``--repeat`` runs each, so a
 loaded machine slows both sides alike; also prints the largest difference between the two.
 Run: ``python benchmarks/bench_morison.py``.
 """
@@ -66,6 +68,12 @@ def run(label: str, drag: MorisonDrag, states: np.ndarray, calls: int, repeat: i
     t_single = _best_per_call(lambda: drag.ode_force(1.7, None, states[next(it)], None),
                               calls, repeat)
     t_batch = _best_per_call(lambda: drag.ode_force(1.7, None, states, None), calls // 10, repeat)
+    kern = drag.compiled_force(states.shape[1])  # None without Numba
+    if kern is not None:
+        out, zero = np.empty(states.shape[1]), np.zeros(states.shape[1])
+        times = iter(1.7 + 0.05 * np.arange(10_000_000))  # distinct t: no cached wave speed
+        t_kernel = _best_per_call(lambda: kern.kernel(next(times), zero, states[next(it)], out,
+                                                      kern.fdata, kern.idata), calls, repeat)
     ref = np.array([base(1.7, r) for r in rows])
     got = drag.ode_force(1.7, None, states, None)
     err = np.abs(got - ref).max() / np.abs(ref).max()
@@ -76,6 +84,9 @@ def run(label: str, drag: MorisonDrag, states: np.ndarray, calls: int, repeat: i
           f"ratio {t_loop / t_single:6.1f}x")
     print(f"  vectorised, batch of {n:<3d}           : {t_batch * 1e6:9.1f} us   "
           f"{t_batch / n * 1e6:.2f} us/state, ratio {n * t_loop / t_batch:6.1f}x")
+    if kern is not None:
+        print(f"  Numba kernel (compiled loop), single: {t_kernel * 1e6:9.1f} us   "
+              f"ratio {t_loop / t_kernel:6.1f}x")
     print(f"  max |difference| / max |force|     : {err:.1e}")
 
 

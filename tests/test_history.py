@@ -6,6 +6,7 @@ References are analytic: derivatives of sines/multisines, exact round trips, uni
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -167,6 +168,31 @@ def test_csv_round_trip_is_exact(tmp_path):
     assert back["zddot"].attrs["estimated"] == ds["zddot"].attrs["estimated"]
     assert back.attrs["source"] == "test"
     assert not list(tmp_path.glob(".*tmp"))  # atomic write left no temporary file
+
+
+@pytest.mark.parametrize("extra_columns", [0, 9000])
+def test_large_csv_floats_are_correctly_rounded(tmp_path, extra_columns):
+    """The fast column reader (lazy header, Arrow/NumPy) gives Python's correctly rounded
+    float() of every cell, also for tiny and huge exponents where a fast strtod loses digits;
+    a 9 000-column header (longer than the first read) takes the same path."""
+    rng = np.random.default_rng(3)
+    n = 4000
+    t = np.arange(n) * 0.01
+    z = rng.standard_normal(n) * 10.0 ** rng.integers(-300, 140, n)
+    cells = [repr(float(v)) for v in z]
+    header = ["time [s]", "z [m]", "F_tot [N]"] + [f"probe{k:05d}" for k in range(extra_columns)]
+    filler = "," + ",".join(["0.5"] * extra_columns) if extra_columns else ""
+    path = tmp_path / "big.csv"
+    with open(path, "w") as f:
+        f.write("# written by a test\n" + ",".join(header) + "\n")
+        for k in range(n):
+            f.write(f"{float(t[k])!r},{cells[k]},{cells[k]}{filler}\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        back = h.read_csv(path, forces=["F_tot"])
+    expect = np.array([float(c) for c in cells])
+    np.testing.assert_array_equal(back["z"].values[:, 0], expect)
+    np.testing.assert_array_equal(back["F_tot"].values[:, 0], expect)
 
 
 def test_netcdf_round_trip_through_read_history(tmp_path):

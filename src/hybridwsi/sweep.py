@@ -12,8 +12,23 @@ runner); resuming with other settings is refused, so a store never mixes cases o
 The store is built in a temporary ``.sweep.*`` folder and renamed into place; such folders
 left by a run killed while consolidating are removed when the next run starts.
 
+Two set-ups:
+
+- the paper sphere (no ``case``): heave only, the shipped or given coefficients, optionally the
+  exact sphere buoyancy (:func:`cummins_case`);
+- a built-in case as data (``SweepConfig.for_case("oc3_hywind")``; :func:`case_sea`): the case's
+  coefficients (its ``[bem]`` table; the shipped file when the inputs match), DOFs (default the
+  case's ``default_dofs``) and force components (:func:`case_forces`: tabulated MoorPy mooring,
+  Morison drag with the wave particle velocity, additional linear damping, rotor), defaults from
+  the case's ``[sweep]`` table. Everything the cases share (coefficients, radiation state-space
+  fit, mooring table) is built ONCE on the client (:func:`case_setup`) and shipped to the
+  workers (OC3: 0.43 MB, of which the table 0.31 MB, pickled and unpickled in ~3 ms;
+  tabulating costs 0.6-1.2 s of MoorPy solves).
+
 Runners are plain top-level functions ``runner(case: dict, config: dict) -> TimeHistory`` so
-that they pickle to workers; :func:`cummins_case` is the default.
+that they pickle to workers; :func:`default_runner` picks one from the configuration. The
+manifest also holds per-case motion statistics (:func:`sea_statistics`: mean, std, min, max per
+DOF after the ramp, and 4 std(eta)) and the library versions.
 """
 
 from __future__ import annotations
@@ -21,17 +36,21 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 import os
+import pickle
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import version
+from hybridwsi.dofs import check_dofs, motion_unit
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, check_compatible, read_netcdf, to_netcdf
 
@@ -41,6 +60,8 @@ STORE = "sweep.zarr"
 MANIFEST = "manifest.json"
 #: prefix of the temporary folders a store is built in
 PARTIAL_PREFIX = ".sweep."
+#: ``run_sweep(scheduler=...)`` value that runs the cases in this process, without Dask
+SYNCHRONOUS = "synchronous"
 
 
 @dataclass
@@ -53,14 +74,29 @@ class SweepConfig:
         Simulated time and time step [s].
     coeffs : str or None
         NetCDF of BEM coefficients (``hydro.bem.compute`` output); None = the paper sphere's
-        shipped coefficients (:func:`load_coefficients`).
+        shipped coefficients (:func:`load_coefficients`), or with ``case`` the case's own.
     mass : float or None
-        Rigid-body mass [kg]; None = the coefficients' ``mass``.
+        Rigid-body mass [kg]; None = the coefficients' ``mass`` (sphere only).
     nonlinear_hydrostatics : bool
         Exact wetted-volume restoring force of the paper sphere instead of ``-C z`` (so the
-        residual ``F_tot - (-C z)`` is not linear in the motion).
+        residual ``F_tot - (-C z)`` is not linear in the motion); sphere only.
     ramp : float
-        Half-cosine ramp [s] of the wave excitation.
+        Half-cosine ramp [s] of the wave excitation (and of the drag's wave velocity).
+    case : str or None
+        A built-in case (``hybridwsi.cases``, e.g. ``"oc3_hywind"``): its coefficients, DOFs and
+        force components (:func:`case_forces`); None = the paper sphere.
+    dofs : tuple of str or None
+        DOFs to simulate; None = the case's ``default_dofs`` (sphere: Heave, the only choice).
+    gamma : float or None
+        JONSWAP peak enhancement γ; None = 3.3 (:class:`hybridwsi.waves.JONSWAP`).
+    wave_components : int or None
+        Number of JONSWAP components; None = 200. The sea repeats after 2π/Δω
+        (Δω = 3.5 ωp / n: ~570 s at Tp 10 s with 200).
+    wave_kinematics : bool or None
+        With ``case``: the Morison drag sees the wave particle velocity (None = yes).
+
+    The fields from ``case`` on are left out of :func:`settings` while None, so a sphere sweep
+    started by an earlier version keeps its settings hash and can be resumed.
     """
 
     duration: float = 60.0
@@ -69,6 +105,33 @@ class SweepConfig:
     mass: float | None = None
     nonlinear_hydrostatics: bool = False
     ramp: float = 2.0
+    case: str | None = None
+    dofs: tuple[str, ...] | None = None
+    gamma: float | None = None
+    wave_components: int | None = None
+    wave_kinematics: bool | None = None
+
+    def __post_init__(self) -> None:
+        if self.dofs is not None:  # one spelling, a tuple (a TOML list or "surge,pitch")
+            self.dofs = check_dofs(self.dofs)
+
+    @classmethod
+    def for_case(cls, name: str, **options: Any) -> SweepConfig:
+        """The configuration of a case: its ``[sweep]`` table (:data:`CASE_SWEEP_KEYS`) and
+        ``default_dofs``, overridden by the ``options`` that are not None."""
+        from hybridwsi.cases import load_case
+
+        spec = load_case(name)
+        table = spec.get("sweep", {})
+        unknown = sorted(set(table) - set(CASE_SWEEP_KEYS))
+        if unknown:
+            raise InputError(f"case {name!r}: [sweep] has unknown keys {unknown} (allowed: "
+                             f"{', '.join(CASE_SWEEP_KEYS)})")
+        given = {k: v for k, v in options.items() if v is not None}
+        merged = {**table, **given}
+        if merged.get("dofs") is None and spec.get("default_dofs"):
+            merged["dofs"] = spec["default_dofs"]
+        return cls(case=name, **merged)
 
     def check(self) -> None:
         if not (self.duration > 0 and self.dt > 0 and self.dt < self.duration):
@@ -77,6 +140,30 @@ class SweepConfig:
             raise InputError(f"ramp must be >= 0 s, got {self.ramp}")
         if self.coeffs is not None and not Path(self.coeffs).is_file():
             raise InputError(f"coefficient file not found: {self.coeffs}")
+        if self.gamma is not None and not (math.isfinite(self.gamma) and self.gamma >= 1):
+            raise InputError(f"JONSWAP gamma must be >= 1, got {self.gamma}")
+        if self.wave_components is not None and not int(self.wave_components) >= 1:
+            raise InputError(f"wave_components must be >= 1, got {self.wave_components}")
+        if self.case is None:
+            if self.dofs is not None and tuple(self.dofs) != SPHERE_DOFS:
+                raise InputError(f"the sphere sweep simulates {', '.join(SPHERE_DOFS)} only; "
+                                 "use a case (--case) or 'hybridwsi simulate --dofs'")
+            if self.wave_kinematics is not None:
+                raise InputError("wave kinematics belong to a case's Morison drag (--case)")
+            return
+        if self.mass is not None:
+            raise InputError("a case's body gives its mass matrix; do not give a mass with it")
+        if self.nonlinear_hydrostatics:
+            raise InputError("nonlinear hydrostatics are the paper sphere's (no case)")
+
+
+#: the DOFs of the sphere sweep (:func:`cummins_case`)
+SPHERE_DOFS = ("Heave",)
+#: keys a case's ``[sweep]`` table may set (defaults of :meth:`SweepConfig.for_case`)
+CASE_SWEEP_KEYS = ("duration", "dt", "ramp", "dofs", "gamma", "wave_components",
+                   "wave_kinematics")
+#: SweepConfig fields left out of the settings while None (added with cases)
+_OPTIONAL_FIELDS = ("case", "dofs", "gamma", "wave_components", "wave_kinematics")
 
 
 def case_grid(hs: Sequence[float], tp: Sequence[float], seeds: int | Sequence[int]) -> list[dict]:
@@ -97,7 +184,7 @@ def case_grid(hs: Sequence[float], tp: Sequence[float], seeds: int | Sequence[in
     ]
 
 
-# ------------------------------------------------------------------------ default runner
+# ------------------------------------------------------------------------------- runners
 def load_coefficients(path: str | os.PathLike | None = None) -> xr.Dataset:
     """The coefficients a sweep runs with: the NetCDF at ``path``, or with None the paper
     sphere's, as shipped with the package (``hydro.bem.paper_coefficients``; no BEM run)."""
@@ -108,9 +195,31 @@ def load_coefficients(path: str | os.PathLike | None = None) -> xr.Dataset:
     return bem.paper_coefficients()
 
 
+def sea(case: dict, config: dict) -> Any:
+    """The JONSWAP sea of one case (Hs, Tp, seed) with the configuration's γ and components."""
+    from hybridwsi import waves
+
+    options = {k: config[key] for k, key in (("gamma", "gamma"), ("n_components",
+               "wave_components")) if config.get(key) is not None}
+    return waves.JONSWAP(hs=case["hs"], tp=case["tp"], seed=int(case["seed"]), **options)
+
+
+def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float) -> Any:
+    """The radiation state space ``cummins.simulate`` would fit itself (same tolerance),
+    fitted once on the client and shipped to the workers."""
+    import inspect
+
+    from hybridwsi import cummins
+
+    tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
+    return cummins.build_system(coeffs, dofs=dofs, mass=mass, radiation="statespace", dt=dt,
+                                ss_tol=tol).ss
+
+
 def cummins_case(case: dict, config: dict) -> xr.Dataset:
-    """One irregular-sea Cummins run (JONSWAP Hs, Tp, seed) -> TimeHistory with ``eta``."""
-    from hybridwsi import bodies, cummins, waves
+    """One irregular-sea Cummins run of the paper sphere (JONSWAP Hs, Tp, seed) -> TimeHistory
+    with ``eta``."""
+    from hybridwsi import bodies, cummins
 
     coeffs = config.get("_coeffs")
     if coeffs is None:
@@ -118,11 +227,134 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
     nonlinear = bool(config.get("nonlinear_hydrostatics", False))
     return cummins.simulate(
         coeffs, mass=config.get("mass"), duration=float(config["duration"]),
-        dt=float(config["dt"]), ramp=float(config.get("ramp", 0.0)),
-        wave=waves.JONSWAP(hs=case["hs"], tp=case["tp"], seed=int(case["seed"])),
+        dt=float(config["dt"]), ramp=float(config.get("ramp", 0.0)), wave=sea(case, config),
         nonlinear_hydrostatics=nonlinear, radiation_ss=config.get("_radiation_ss"),
         body=bodies.FloatingSphere.paper() if nonlinear else None,
     )
+
+
+def case_coefficients(spec: dict) -> xr.Dataset:
+    """A case's coefficients: ``bem.compute`` on its ``[bem]`` table, which returns the
+    shipped file without solving when the inputs match (OC3-Hywind: ``bem_oc3_hywind.nc``)."""
+    import warnings
+
+    from hybridwsi.cases import bem_arguments
+    from hybridwsi.hydro import bem
+
+    with warnings.catch_warnings():  # Capytaine's chatter on loading
+        warnings.simplefilter("ignore")
+        return bem.compute(**bem_arguments(spec), progress=False)
+
+
+def sweep_coefficients(manifest: dict) -> xr.Dataset:
+    """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
+    was given, else its case's (:func:`case_coefficients`), else the paper sphere's."""
+    from hybridwsi.cases import load_case
+
+    cfg = manifest.get("config", {})
+    if cfg.get("coeffs"):
+        return load_coefficients(cfg["coeffs"])
+    if cfg.get("case"):
+        return case_coefficients(load_case(cfg["case"]))
+    return load_coefficients()
+
+
+def case_forces(spec: dict, dofs: Sequence[str], *, wave: Any = None, ramp: float = 0.0,
+                mooring_table: Any = None) -> list:
+    """The force components of a case on ``dofs`` (each present only if the case has it).
+
+    - ``[mooring]``: :class:`~hybridwsi.forces.MooringForce`, the tabulated nonlinear MoorPy
+      force ``F(q) - F0`` (``mooring_table``: a table already built, else tabulated here);
+    - ``[hydrodynamics] drag_cd``: :class:`~hybridwsi.forces.MorisonDrag` on the hull profile,
+      with the particle velocity of ``wave`` (ramped like the excitation) when given;
+    - ``[hydrodynamics] additional_damping``: the additional linear damping;
+    - ``[rotor]``: :func:`~hybridwsi.forces.rotor_from_case` (parked: no force).
+    """
+    from hybridwsi.forces import (
+        MooringForce,
+        MorisonDrag,
+        additional_damping,
+        rotor_from_case,
+    )
+
+    hydro = spec.get("hydrodynamics", {})
+    out = []
+    if "mooring" in spec:
+        out.append(MooringForce.from_case(spec, dofs) if mooring_table is None
+                   else MooringForce(mooring_table, dofs))
+    if hydro.get("drag_cd"):
+        out.append(MorisonDrag.from_case(spec, dofs, wave=wave, ramp=ramp))
+    if hydro.get("additional_damping"):
+        out.append(additional_damping(spec, dofs))
+    if "rotor" in spec:
+        out.append(rotor_from_case(spec, dofs))
+    return out
+
+
+def case_setup(config: SweepConfig) -> dict:
+    """What every case of a case sweep shares, built once (on the client) and shipped.
+
+    Returns ``{"_case": the case dict, "_dofs", "_coeffs", "_radiation_ss",
+    "_mooring_table"}`` (the table None when the case has no mooring).
+    """
+    from hybridwsi.cases import load_case
+    from hybridwsi.forces import MooringForce
+    from hybridwsi.hydro import coefficients as cf
+
+    spec = load_case(str(config.case))
+    coeffs = load_coefficients(config.coeffs) if config.coeffs else case_coefficients(spec)
+    dofs = check_dofs(config.dofs or spec.get("default_dofs") or cf.dofs(coeffs))
+    missing = [d for d in dofs if d not in cf.dofs(coeffs)]
+    if missing:
+        raise InputError(f"the coefficients of case {config.case!r} have no DOF "
+                         f"{', '.join(missing)} (they have {', '.join(cf.dofs(coeffs))})")
+    table = MooringForce.from_case(spec, dofs).table if "mooring" in spec else None
+    return {"_case": spec, "_dofs": dofs, "_coeffs": coeffs,
+            "_radiation_ss": radiation_ss(coeffs, dofs, None, config.dt),
+            "_mooring_table": table}
+
+
+def _public(config: dict) -> SweepConfig:
+    """The :class:`SweepConfig` of a worker's config dict (the shipped ``_`` entries dropped)."""
+    return SweepConfig(**{k: v for k, v in config.items() if not k.startswith("_")})
+
+
+def case_sea(case: dict, config: dict) -> xr.Dataset:
+    """One irregular-sea Cummins run of a built-in case -> TimeHistory with ``eta``.
+
+    The case's coefficients, DOFs and force components (:func:`case_forces`); the shared
+    objects come from ``config`` (:func:`case_setup`, shipped by :func:`run_sweep`) or are
+    built here when absent.
+    """
+    from hybridwsi import cummins
+
+    shared = config if "_case" in config else case_setup(_public(config))
+    wave = sea(case, config)
+    ramp = float(config.get("ramp", 0.0))
+    kinematics = config.get("wave_kinematics") is not False  # None: yes
+    forces = case_forces(shared["_case"], shared["_dofs"], wave=wave if kinematics else None,
+                         ramp=ramp, mooring_table=shared["_mooring_table"])
+    return cummins.simulate(
+        shared["_coeffs"], dofs=shared["_dofs"], duration=float(config["duration"]),
+        dt=float(config["dt"]), ramp=ramp, wave=wave, forces=forces,
+        radiation_ss=shared["_radiation_ss"])
+
+
+def default_runner(config: SweepConfig) -> Runner:
+    """:func:`case_sea` for a case, else :func:`cummins_case` (the paper sphere)."""
+    return case_sea if config.case else cummins_case
+
+
+def shared_objects(config: SweepConfig, runner: Runner) -> dict:
+    """The objects the default runners would otherwise rebuild per case (coefficients,
+    radiation state space, mooring table), built once; {} for another runner."""
+    if runner is case_sea:
+        return case_setup(config)
+    if runner is cummins_case:
+        coeffs = load_coefficients(config.coeffs)
+        return {"_coeffs": coeffs,
+                "_radiation_ss": radiation_ss(coeffs, SPHERE_DOFS, config.mass, config.dt)}
+    return {}
 
 
 # ------------------------------------------------------------------------- worker side
@@ -165,17 +397,41 @@ def _file_digest(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
-def settings(config: SweepConfig, runner: Runner | None = None) -> dict:
+def settings(config: SweepConfig, runner: Runner | None = None, shared: dict | None = None
+             ) -> dict:
     """What every case of a sweep shares, as plain values: the configuration, the SHA-256 of
     the coefficient file's content (a file replaced in place changes the set-up) and the
-    runner's qualified name. The case list is not part of it (a grid may be extended)."""
-    runner = cummins_case if runner is None else runner
+    runner's qualified name. The case list is not part of it (a grid may be extended).
+
+    With a case also (:func:`case_settings`): the SHA-256 of the case's content, the
+    coefficients' input hash, the DOFs simulated, every force component (its description) and
+    the mooring table's input hash. ``shared``: :func:`case_setup` of ``config`` if already
+    built (else built here, ~3 s for OC3-Hywind).
+    """
+    runner = default_runner(config) if runner is None else runner
     cfg = asdict(config)
+    for key in _OPTIONAL_FIELDS:  # absent while unset: the settings of sphere sweeps as before
+        if cfg[key] is None:
+            del cfg[key]
     if config.coeffs:  # the same file from another working directory is the same set-up
         cfg["coeffs"] = str(Path(config.coeffs).resolve())
     cfg["coeffs_sha256"] = _file_digest(config.coeffs) if config.coeffs else None
     cfg["runner"] = f"{getattr(runner, '__module__', '?')}.{getattr(runner, '__qualname__', runner)}"
+    if config.case:
+        cfg.update(case_settings(case_setup(config) if shared is None else shared))
     return cfg
+
+
+def case_settings(shared: dict) -> dict:
+    """The set-up of a case sweep as plain values (from :func:`case_setup`)."""
+    from hybridwsi.cummins import coeffs_hash
+
+    spec, table = shared["_case"], shared["_mooring_table"]
+    forces = case_forces(spec, shared["_dofs"], mooring_table=table)
+    return {"dofs": list(shared["_dofs"]), "case_sha256": _digest(spec),
+            "coeffs_hash": coeffs_hash(shared["_coeffs"]),
+            "forces": [f.describe() for f in forces],
+            "mooring_table": None if table is None else table.dataset.attrs.get("input_hash")}
 
 
 def _digest(current: dict) -> str:
@@ -229,7 +485,7 @@ def run_sweep(
     out: str | os.PathLike,
     config: SweepConfig | None = None,
     *,
-    runner: Runner = cummins_case,
+    runner: Runner | None = None,
     scheduler: str | None = None,
     n_workers: int = 2,
     resume: bool = True,
@@ -245,12 +501,14 @@ def run_sweep(
     out : path
         Output folder (``parts/``, ``sweep.zarr``, ``manifest.json``).
     config : SweepConfig
-        Shared settings (duration, dt, coefficients, nonlinearity).
-    runner : callable
-        ``runner(case, config_dict) -> TimeHistory``, picklable.
+        Shared settings (duration, dt, coefficients, case, DOFs, sea options).
+    runner : callable, optional
+        ``runner(case, config_dict) -> TimeHistory``, picklable; default
+        :func:`default_runner` (the sphere's :func:`cummins_case` or a case's :func:`case_sea`).
     scheduler : str, optional
-        Address of a running Dask scheduler (``tcp://host:8786``); default a LocalCluster of
-        ``n_workers`` processes with one thread each.
+        Address of a running Dask scheduler (``tcp://host:8786``); ``"synchronous"`` runs the
+        cases one after the other in this process (no Dask; for debugging and tests); default
+        a LocalCluster of ``n_workers`` processes with one thread each.
     resume : bool
         Skip cases already written; with False an existing non-empty ``parts/`` is an error
         (delete it or pass ``resume=True``). Resuming with settings other than those in the
@@ -261,10 +519,9 @@ def run_sweep(
     Path
         The consolidated Zarr store (or the parts folder when ``consolidate_store=False``).
     """
-    from tqdm.auto import tqdm
-
     config = config or SweepConfig()
     config.check()
+    runner = default_runner(config) if runner is None else runner
     out = Path(out)
     ids = [c["case_id"] for c in cases]
     if len(set(ids)) != len(ids):
@@ -273,7 +530,9 @@ def run_sweep(
     if done and not resume:
         raise InputError(f"{out / PARTS} already holds {len(done)} finished case(s); "
                          "pass --resume to continue that sweep or choose a new --out")
-    current = settings(config, runner)
+    # a case's shared objects enter its settings, so they are built before the resume check
+    shared = shared_objects(config, runner) if config.case else None
+    current = settings(config, runner, shared)
     if done:
         check_resume(out, current)
     todo = [c for c in cases if c["case_id"] not in done]
@@ -282,57 +541,127 @@ def run_sweep(
         stale.unlink(missing_ok=True)
     clean_partials(out)
     _write_manifest(out, cases, current, status="running")
-    cfg = asdict(config)
     failures: list[str] = []
-    if todo:
-        client, cluster = _client(scheduler, n_workers)
-        try:
-            if runner is cummins_case:  # load/compute and fit once, ship to the workers
-                from hybridwsi import cummins
-
-                cfg["_coeffs"] = load_coefficients(cfg.get("coeffs"))
-                import inspect
-
-                # the fit simulate() itself would make (same tolerance), done once
-                tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
-                cfg["_radiation_ss"] = cummins.build_system(
-                    cfg["_coeffs"], mass=config.mass, radiation="statespace", dt=config.dt,
-                    ss_tol=tol).ss
-            cfg_f = client.scatter(cfg, broadcast=True)
-            futures = [client.submit(run_one, c, cfg_f, str(out), runner, key=f"case-{c['case_id']}",
-                                     pure=False) for c in todo]
-            from distributed import as_completed
-
-            bar = tqdm(total=len(cases), initial=len(cases) - len(todo), desc="sweep",
-                       unit="case", disable=not progress)
-            for fut in as_completed(futures):
-                try:
-                    fut.result()
-                except Exception as exc:  # keep going; report all failed cases at the end
-                    failures.append(f"{fut.key}: {type(exc).__name__}: {exc}")
-                bar.update(1)
-            bar.close()
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+    if todo:  # load/compute and fit once, ship to the workers
+        shared = shared_objects(config, runner) if shared is None else shared
+        failures = _run_cases(todo, {**asdict(config), **shared}, out, runner, scheduler,
+                              n_workers, len(cases), progress)
     if failures:
         raise SolverError(f"{len(failures)} case(s) failed (re-run with --resume to retry): "
                           + "; ".join(failures[:3]))
     if not consolidate_store:
         return out / PARTS
     path = consolidate(out, ids)
-    _write_manifest(out, cases, current, status="complete")
+    _write_manifest(out, cases, current, status="complete",
+                    statistics=sea_statistics(open_sweep(path), start=config.ramp))
     return path
 
 
-def _write_manifest(out: Path, cases: Sequence[dict], current: dict, status: str) -> None:
+def _run_cases(todo: Sequence[dict], cfg: dict, out: Path, runner: Runner,
+               scheduler: str | None, n_workers: int, n_total: int, progress: bool
+               ) -> list[str]:
+    """Run ``todo`` (Dask, or in this process with ``scheduler="synchronous"``); return the
+    failures as one-line texts (the other cases still run)."""
+    from tqdm.auto import tqdm
+
+    failures: list[str] = []
+    bar = tqdm(total=n_total, initial=n_total - len(todo), desc="sweep", unit="case",
+               disable=not progress)
+    if scheduler == SYNCHRONOUS:
+        # run on what a worker would receive: unpickled arrays are contiguous copies, and BLAS
+        # rounds a strided view (e.g. the state-space matrices) differently at 1e-16, so
+        # this keeps the in-process numbers bit-identical to the workers'
+        cfg = pickle.loads(pickle.dumps(cfg))
+        for c in todo:
+            try:
+                run_one(c, cfg, str(out), runner)
+            except Exception as exc:  # keep going; report all failed cases at the end
+                failures.append(f"case-{c['case_id']}: {type(exc).__name__}: {exc}")
+            bar.update(1)
+        bar.close()
+        return failures
+    client, cluster = _client(scheduler, n_workers)
+    try:
+        from distributed import as_completed
+
+        cfg_f = client.scatter(cfg, broadcast=True)
+        futures = [client.submit(run_one, c, cfg_f, str(out), runner, key=f"case-{c['case_id']}",
+                                 pure=False) for c in todo]
+        for fut in as_completed(futures):
+            try:
+                fut.result()
+            except Exception as exc:  # keep going; report all failed cases at the end
+                failures.append(f"{fut.key}: {type(exc).__name__}: {exc}")
+            bar.update(1)
+        bar.close()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return failures
+
+
+def sea_statistics(sweep: xr.Dataset, start: float = 0.0) -> dict:
+    """Per-case motion statistics of a consolidated sweep, from ``start`` [s] on (after the
+    ramp, so the start-up transient of the excitation is left out).
+
+    Returns
+    -------
+    dict
+        ``{"window_s": [start, end], "cases": {case_id: {dof: {"mean", "std", "min", "max",
+        "unit"}, "eta": {"std", "hs_4std"}}}}`` in m or rad per DOF; ``hs_4std`` = 4 std(η)
+        [m], the significant wave height the sea actually had at the wave probe.
+    """
+    t = sweep["time"].values
+    keep = t >= start - 1e-9 * max(1.0, abs(start))
+    if not keep.any():
+        raise InputError(f"no samples after {start} s to summarise")
+    z = sweep["z"].isel(time=np.flatnonzero(keep))
+    stats = {name: getattr(z, name)("time").transpose("case", "dof").values
+             for name in ("mean", "std", "min", "max")}
+    eta = None
+    if "eta" in sweep:
+        e = sweep["eta"].isel(time=np.flatnonzero(keep))
+        eta = e.std("time").transpose("case", ...).values.reshape(e.sizes["case"], -1)[:, 0]
+    dofs = [str(d) for d in sweep["dof"].values]
+    cases = {}
+    for i, cid in enumerate(str(c) for c in sweep["case"].values):
+        row: dict[str, Any] = {
+            d: {**{k: float(v[i, j]) for k, v in stats.items()}, "unit": motion_unit(d)}
+            for j, d in enumerate(dofs)}
+        if eta is not None:
+            row["eta"] = {"std": float(eta[i]), "hs_4std": float(4.0 * eta[i]), "unit": "m"}
+        cases[cid] = row
+    return {"window_s": [float(t[keep][0]), float(t[-1])], "cases": cases}
+
+
+def _write_manifest(out: Path, cases: Sequence[dict], current: dict, status: str,
+                    statistics: dict | None = None) -> None:
     config = {k: v for k, v in current.items() if k not in ("coeffs_sha256", "runner")}
-    meta = {"hybridwsi_version": version(), "status": status, "config": config,
-            "settings": current, "settings_hash": _digest(current),
-            "n_cases": len(cases), "cases": list(cases)}
+    inputs = {k: current[k] for k in ("case", "case_sha256", "coeffs", "coeffs_sha256",
+                                      "coeffs_hash", "dofs", "forces", "mooring_table")
+              if k in current}
+    meta = {"hybridwsi_version": version(), "versions": library_versions(), "status": status,
+            "inputs": inputs, "config": config, "settings": current,
+            "settings_hash": _digest(current), "n_cases": len(cases), "cases": list(cases)}
+    if statistics is not None:
+        meta["statistics"] = statistics
     text = json.dumps(meta, indent=1, default=str)
     atomic_write(out / MANIFEST, lambda tmp: Path(tmp).write_text(text))
+
+
+def library_versions() -> dict[str, str | None]:
+    """Versions of the libraries a sweep's numbers depend on (None: not installed)."""
+    from importlib import metadata
+
+    out: dict[str, str | None] = {"hybridwsi": version()}
+    for name in ("numpy", "scipy", "xarray", "dask", "distributed", "zarr", "moorpy",
+                 "capytaine"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
 
 
 def consolidate(out: str | os.PathLike, case_ids: Sequence[str] | None = None) -> Path:

@@ -8,39 +8,66 @@ HELP = "run a grid of irregular-sea Cummins cases on Dask into one Zarr store (r
 DESCRIPTION = (
     "Hs x Tp x seeds JONSWAP cases, each simulated on a Dask worker (LocalCluster of "
     "--workers processes by default, or --scheduler ADDRESS) and written atomically to "
-    "OUT/parts/<case>.nc; then consolidated into OUT/sweep.zarr with a 'case' dimension. "
-    "Re-run with --resume after an interruption: finished cases are skipped."
+    "OUT/parts/<case>.nc; then consolidated into OUT/sweep.zarr with a 'case' dimension, and "
+    "OUT/manifest.json (inputs, versions, settings hash, per-case motion statistics). "
+    "Default: the paper sphere in heave. --case NAME (e.g. oc3_hywind) simulates a built-in "
+    "case: its coefficients, DOFs, force components (mooring, Morison drag, additional "
+    "damping, rotor) and the defaults of its [sweep] table. Re-run with --resume after an "
+    "interruption: finished cases are skipped."
 )
 
-#: the DOFs the sweep's Cummins runner simulates (hybridwsi.sweep.cummins_case)
-SWEEP_DOFS = ("Heave",)
+#: the sphere sweep's defaults (a case's [sweep] table replaces them)
+SPHERE_DEFAULTS = {"duration": 60.0, "dt": 0.01, "ramp": 2.0}
+
+
+def _scheduler(text: str) -> str:
+    """argparse type: a Dask scheduler address, or ``synchronous`` (in this process)."""
+    from hybridwsi.commands._options import scheduler_address
+    from hybridwsi.sweep import SYNCHRONOUS
+
+    return text if text == SYNCHRONOUS else scheduler_address(text)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from hybridwsi.commands import _options as o
 
+    p.add_argument("--case", default=None, metavar="NAME",
+                   help="built-in case (hybridwsi.cases, e.g. oc3_hywind): its body's "
+                        "coefficients ([bem] table, shipped), DOFs, force components and "
+                        "[sweep] defaults; default: the paper sphere in heave")
     p.add_argument("--hs", required=True, type=o.positive_floats, metavar="HS[,HS...]",
                    help="significant wave heights [m], comma-separated")
     p.add_argument("--tp", required=True, type=o.positive_floats, metavar="TP[,TP...]",
                    help="peak periods [s], comma-separated")
     p.add_argument("--seeds", type=o.positive_int, default=1, metavar="N",
                    help="random wave-phase seeds 0..N-1 per (Hs, Tp) (default 1)")
+    p.add_argument("--jonswap-gamma", type=o.positive_float, default=None, metavar="GAMMA",
+                   help="JONSWAP peak-enhancement factor (default 3.3, or the case's)")
+    p.add_argument("--wave-components", type=o.positive_int, default=None, metavar="N",
+                   help="JONSWAP frequency components over (0.5, 4) x the peak frequency "
+                        "(default 200, or the case's); the sea repeats after 2 pi / d_omega")
+    p.add_argument("--no-wave-kinematics", dest="wave_kinematics", action="store_false",
+                   default=None,
+                   help="with --case: Morison drag on the body velocity alone, without the "
+                        "wave particle velocity")
     o.add_out(p, "output folder (parts/, sweep.zarr, manifest.json)", required=True,
               metavar="DIR")
-    p.add_argument("--duration", type=o.positive_float, default=60.0,
-                   help="simulated time per case [s] (default 60)")
-    p.add_argument("--dt", type=o.positive_float, default=0.01,
-                   help="time step [s] of each run (default 0.01)")
-    o.add_coeffs(p, "default: the paper sphere's shipped coefficients")
-    o.add_dofs(p, "the DOFs to simulate (the sweep runner does Heave only)",
-               default=SWEEP_DOFS)
-    o.add_mass(p, "default from the coefficients")
+    p.add_argument("--duration", type=o.positive_float, default=None,
+                   help="simulated time per case [s] (default 60, or the case's)")
+    p.add_argument("--dt", type=o.positive_float, default=None,
+                   help="time step [s] of each run (default 0.01, or the case's)")
+    o.add_coeffs(p, "default: the paper sphere's shipped coefficients, or the case's")
+    o.add_dofs(p, "the DOFs to simulate (default: the case's default DOFs; the sphere sweep "
+                  "does Heave only)")
+    o.add_mass(p, "default from the coefficients (sphere only; a case's body gives its mass)")
     p.add_argument("--nonlinear-hydrostatics", action="store_true",
-                   help="exact sphere buoyancy instead of -C z")
-    p.add_argument("--ramp", type=o.nonnegative_float, default=2.0,
-                   help="wave ramp duration [s] (default 2)")
-    p.add_argument("--scheduler", type=o.scheduler_address, metavar="ADDRESS",
-                   help="Dask scheduler address (tcp://host:8786; default a LocalCluster)")
+                   help="exact sphere buoyancy instead of -C z (sphere only)")
+    p.add_argument("--ramp", type=o.nonnegative_float, default=None,
+                   help="wave ramp duration [s] (default 2, or the case's); the statistics "
+                        "in the manifest start after it")
+    p.add_argument("--scheduler", type=_scheduler, metavar="ADDRESS",
+                   help="Dask scheduler address (tcp://host:8786), or 'synchronous' to run "
+                        "the cases one by one in this process (default a LocalCluster)")
     p.add_argument("--workers", type=o.positive_int, default=2,
                    help="worker processes of the LocalCluster (default 2)")
     p.add_argument("--resume", action="store_true", help="continue a previous sweep in OUT")
@@ -65,29 +92,71 @@ def check_coefficients(coeffs, *, mass_given: bool) -> None:
         cf.matrix(coeffs, name)  # raises on NaN or a malformed matrix
 
 
+def config_from(args: argparse.Namespace):
+    """The :class:`~hybridwsi.sweep.SweepConfig` of the options: a case's ``[sweep]`` defaults
+    (``--case``) or the sphere's, overridden by the options given."""
+    from hybridwsi.sweep import SweepConfig
+
+    given = {"duration": args.duration, "dt": args.dt, "ramp": args.ramp, "dofs": args.dofs,
+             "gamma": args.jonswap_gamma, "wave_components": args.wave_components,
+             "wave_kinematics": args.wave_kinematics, "coeffs": args.coeffs, "mass": args.mass,
+             "nonlinear_hydrostatics": args.nonlinear_hydrostatics or None}
+    if args.case is not None:
+        cfg = SweepConfig.for_case(args.case, **given)
+    else:
+        cfg = SweepConfig(**{**SPHERE_DEFAULTS, **{k: v for k, v in given.items()
+                                                   if v is not None}})
+    cfg.check()  # one line before the Dask cluster starts
+    return cfg
+
+
+#: cases whose statistics are printed (all are in manifest.json)
+PRINTED_CASES = 20
+
+
+def print_statistics(manifest: dict) -> None:
+    """One line per case: std and max |.| of every DOF after the ramp, and 4 std(eta)."""
+    rows = list(manifest.get("statistics", {}).get("cases", {}).items())
+    if rows:
+        window = manifest["statistics"]["window_s"]
+        print(f"motion statistics over {window[0]:g}-{window[1]:g} s (manifest.json):")
+    for cid, row in rows[:PRINTED_CASES]:
+        parts = [f"{d} std {v['std']:.4g} max|.| {max(abs(v['min']), abs(v['max'])):.4g} "
+                 f"{v['unit']}" for d, v in row.items() if d != "eta"]
+        if "eta" in row:
+            parts.append(f"4 std(eta) {row['eta']['hs_4std']:.3g} m")
+        print(f"  {cid}: " + "; ".join(parts))
+    if len(rows) > PRINTED_CASES:
+        print(f"  ... and {len(rows) - PRINTED_CASES} more cases in manifest.json")
+
+
 def run(args: argparse.Namespace) -> int:
+    import json
+
     from hybridwsi.commands._options import check_steps, require
     from hybridwsi.errors import InputError
     from hybridwsi.files import check_output_path
     from hybridwsi.hydro.formats import read_coefficients
-    from hybridwsi.sweep import MANIFEST, SweepConfig, case_grid, run_sweep
+    from hybridwsi.sweep import MANIFEST, SPHERE_DOFS, SYNCHRONOUS, case_grid, run_sweep
 
-    require("distributed", "zarr")
-    if tuple(args.dofs) != SWEEP_DOFS:
-        raise InputError(f"sweep simulates {', '.join(SWEEP_DOFS)} only; use 'hybridwsi "
-                         "simulate --dofs' for other DOFs")
+    if args.scheduler == SYNCHRONOUS:  # no Dask workers, but the store is Zarr
+        require("zarr")
+    else:
+        require("distributed", "zarr")
     check_output_path(args.out, [args.coeffs], kind="dir", products=(MANIFEST,))
-    if args.duration <= args.dt:
-        raise InputError(f"--duration ({args.duration} s) must be longer than --dt ({args.dt} s)")
-    check_steps(args.duration, args.dt, len(args.dofs))
+    cfg = config_from(args)
+    if cfg.duration <= cfg.dt:
+        raise InputError(f"--duration ({cfg.duration} s) must be longer than --dt ({cfg.dt} s)")
+    check_steps(cfg.duration, cfg.dt, len(cfg.dofs or SPHERE_DOFS))
     if args.coeffs:  # a bad file is refused here, before the Dask cluster starts
         check_coefficients(read_coefficients(args.coeffs, assume_seawater=True),
                            mass_given=args.mass is not None)
     cases = case_grid(args.hs, args.tp, args.seeds)
-    cfg = SweepConfig(duration=args.duration, dt=args.dt, coeffs=args.coeffs, mass=args.mass,
-                      nonlinear_hydrostatics=args.nonlinear_hydrostatics, ramp=args.ramp)
     store = run_sweep(cases, args.out, cfg, scheduler=args.scheduler, n_workers=args.workers,
                       resume=args.resume, progress=not args.quiet)
     if not args.quiet:
         print(f"{len(cases)} cases -> {store}")
+        from pathlib import Path
+
+        print_statistics(json.loads((Path(args.out) / MANIFEST).read_text()))
     return 0

@@ -16,6 +16,10 @@ The same objects enter the ODE of the reconstruction (paper Eq. 4) and the stabi
   state; ``x`` are the component's internal states (``n_states`` of them, e.g. a radiation
   state-space realisation), whose derivative is ``state_derivative(t, z, zdot, x)``.
 
+Optionally, ``compiled_force(n_dof)`` gives a Numba kernel of ``ode_force`` that the stepping
+solver's compiled RK4 loop calls (:mod:`hybridwsi.forces._compiled`); without one the solver
+runs its NumPy loop.
+
 Subclass :class:`KnownComponent` for new physics; the built-ins live beside this module
 (:mod:`hybridwsi.forces.linear`, :mod:`hybridwsi.forces.radiation`).
 """
@@ -23,6 +27,7 @@ Subclass :class:`KnownComponent` for new physics; the built-ins live beside this
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -77,6 +82,23 @@ class KnownComponent(ABC):
     ) -> np.ndarray:
         """Time derivative of the internal states (none by default)."""
         return np.zeros(0)
+
+    def compiled_force(self, n_dof: int) -> Any:
+        """Optional Numba kernel of :meth:`ode_force` for the compiled RK4 loop, or None.
+
+        Returns a :class:`hybridwsi.forces._compiled.CompiledForce` (a kernel with the same
+        result as ``ode_force`` to rounding, and its data) or None, in which case the stepping
+        solver runs its NumPy path. Components with internal states return None. The default
+        compiles the default ``ode_force`` (``−B ż − C z`` of :meth:`linear_coefficients`)
+        when a subclass keeps it; a subclass overriding ``ode_force`` returns None unless it
+        overrides this method too. None without Numba.
+        """
+        if self.n_states or type(self).ode_force is not KnownComponent.ode_force:
+            return None
+        from hybridwsi.forces._compiled import linear_force  # imports Numba: only on demand
+
+        _, b, c = self.linear_coefficients(n_dof)
+        return linear_force(b, c)
 
     def initial_state(self, hist: xr.Dataset) -> np.ndarray:
         """Internal states at the first sample of ``hist`` (zeros: start from rest)."""

@@ -217,14 +217,10 @@ def rotation_matrix(roll: Any, pitch: Any, yaw: Any, xp: Any = np) -> Any:
 
     Entries are floats (``xp=math``) or arrays (``xp=numpy``) of the same shape as the angles.
     """
-    s1, c1 = xp.sin(yaw), xp.cos(yaw)
-    s2, c2 = xp.sin(pitch), xp.cos(pitch)
-    s3, c3 = xp.sin(roll), xp.cos(roll)
-    return (
-        (c1 * c2, c1 * s2 * s3 - c3 * s1, s1 * s3 + c1 * c3 * s2),
-        (c2 * s1, c1 * c3 + s1 * s2 * s3, c3 * s1 * s2 - c1 * s3),
-        (-s2, c2 * s3, c2 * c3),
-    )
+    from hybridwsi.forces._compiled import rotation_from  # one formula with the kernel
+
+    return rotation_from(xp.sin(yaw), xp.cos(yaw), xp.sin(pitch), xp.cos(pitch), xp.sin(roll),
+                         xp.cos(roll))
 
 
 def _as_states(q: Any) -> np.ndarray:
@@ -482,6 +478,7 @@ class MooringTable:
         patches = np.stack([_bicubic_patches(l_h, l_v, dataset[name].values)
                             for name in ("horizontal_force", "vertical_force")], axis=2)
         flat = patches.reshape(self._n[0] * self._n[1], 32)  # cell -> (H 16, V 16)
+        self._cells_flat = np.ascontiguousarray(flat)  # (n_cells, 32): the compiled kernel
         self._cells_array = _Columns(np.ascontiguousarray(flat.T))  # (32, n_cells): batches
         self._cells_list = [tuple(row) for row in flat.tolist()]  # for single states
         # (anchor x, y, z, fairlead x, y, z): per line for one state, all lines at once as
@@ -489,6 +486,10 @@ class MooringTable:
         self._lines_each = [tuple(map(float, a)) + tuple(map(float, f))
                             for a, f in zip(lines.anchors, lines.fairleads)]
         self._lines_all = [tuple(np.concatenate([lines.anchors, lines.fairleads], axis=1).T)]
+        # one state through the Numba kernel when available (no Python per-line overhead)
+        self._single = self.compiled(list(range(6)), np.zeros(6))
+        self._out6 = np.empty(6)
+        self._no_rate = np.zeros(6)
 
     @classmethod
     def from_dataset(cls, dataset: xr.Dataset) -> MooringTable:
@@ -512,14 +513,37 @@ class MooringTable:
         """
         q = _as_states(q)
         if q.ndim == 1:
-            state = q.tolist()
-            f = self._wrench(state, _ScalarMath, self._cells_list, self._lines_each)
-            f[5] -= self.lines.yaw_spring * state[5]
-            return np.array(f)
+            return self._force6_one(q) if self._single is not None else self._force6_scalar(q)
+        if self._single is not None:
+            return self._force6_rows(q)
         f = np.stack(self._wrench(q.T[:, :, None], _ArrayMath, self._cells_array,
                                   self._lines_all), axis=-1)
         f[:, 5] -= self.lines.yaw_spring * q[:, 5]
         return f
+
+    def _force6_one(self, q: np.ndarray) -> np.ndarray:
+        """One state (6,) through the Numba kernel: the arithmetic of :meth:`_force6_scalar`."""
+        c = self._single
+        if c.kernel(0.0, np.ascontiguousarray(q), self._no_rate, self._out6, c.fdata, c.idata):
+            raise SolverError(_OUTSIDE)
+        return self._out6.copy()
+
+    def _force6_rows(self, q: np.ndarray) -> np.ndarray:
+        """A batch (n, 6) through the Numba kernel, row by row."""
+        from hybridwsi.forces._compiled import mooring_rows
+
+        c = self._single
+        out = np.empty(q.shape)
+        if mooring_rows(np.ascontiguousarray(q), out, c.fdata, c.idata):
+            raise SolverError(_OUTSIDE)
+        return out
+
+    def _force6_scalar(self, q: np.ndarray) -> np.ndarray:
+        """One state (6,) in Python floats (without Numba)."""
+        state = q.tolist()
+        f = self._wrench(state, _ScalarMath, self._cells_list, self._lines_each)
+        f[5] -= self.lines.yaw_spring * state[5]
+        return np.array(f)
 
     def _wrench(self, q: Any, xp: Any, cells: Any, lines: Any) -> list[Any]:
         """Sum over lines of the fairlead forces and their moments; ``q`` unpacks to 6 items.
@@ -527,6 +551,8 @@ class MooringTable:
         Written once for floats and for arrays (``xp``); kept flat because the single-state
         call sits inside the ODE right-hand side.
         """
+        from hybridwsi.forces._compiled import bicubic, line_pull  # one formula with the kernel
+
         x0, y0, z0, roll, pitch, yaw = q
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_matrix(roll, pitch, yaw, xp)
         (h0, v0), (dh, dv), (nh, nv) = self._origin, self._step, self._n
@@ -539,28 +565,26 @@ class MooringTable:
             dx, dy, dz = bx + x0 - ax, by + y0 - ay, bz + z0 - az
             lh = hypot(dx, dy)
             k, u, v = locate((lh - h0) / dh, (dz - v0) / dv, nh, nv)
-            (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
-             b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15
-             ) = cells[k]
-            # bicubic sum c_pq u^p v^q by Horner's rule: horizontal (a) and vertical (b) force
-            horizontal = ((a0 + v * (a1 + v * (a2 + v * a3)))
-                          + u * ((a4 + v * (a5 + v * (a6 + v * a7)))
-                                 + u * ((a8 + v * (a9 + v * (a10 + v * a11)))
-                                        + u * (a12 + v * (a13 + v * (a14 + v * a15))))))
-            fz = -((b0 + v * (b1 + v * (b2 + v * b3)))
-                   + u * ((b4 + v * (b5 + v * (b6 + v * b7)))
-                          + u * ((b8 + v * (b9 + v * (b10 + v * b11)))
-                                 + u * (b12 + v * (b13 + v * (b14 + v * b15))))))
-            towards = -horizontal / lh  # horizontal pull points from the fairlead to the anchor
-            fx, fy = towards * dx, towards * dy
+            c = cells[k]  # bicubic coefficients: horizontal 0-15, vertical 16-31
+            fx, fy, fz, mx, my, mz = line_pull(bicubic(c, 0, u, v), bicubic(c, 16, u, v), lh,
+                                               dx, dy, bx, by, bz)
             f1 += fx
             f2 += fy
             f3 += fz
-            m1 += by * fz - bz * fy
-            m2 += bz * fx - bx * fz
-            m3 += bx * fy - by * fx
+            m1 += mx
+            m2 += my
+            m3 += mz
         total = xp.total
         return [total(f1), total(f2), total(f3), total(m1), total(m2), total(m3)]
+
+    def compiled(self, index: Sequence[int], f0: np.ndarray) -> Any:
+        """Numba kernel of ``force6(q) − f0`` on the DOFs ``index`` of q, or None without Numba
+        (:mod:`hybridwsi.forces._compiled`; same arithmetic as the single-state path)."""
+        from hybridwsi.forces._compiled import mooring_force
+
+        return mooring_force(self._origin, self._step, self._n, self.lines.yaw_spring, f0,
+                             self.lines.anchors, self.lines.fairleads, self._cells_flat,
+                             [int(i) for i in index], _OUTSIDE)
 
     def preload(self) -> np.ndarray:
         """``F0 = F(0)`` from the table [N, N m], shape (6,)."""
@@ -642,6 +666,11 @@ class MooringForce(KnownComponent):
         self._check(n_dof)
         zero = np.zeros((n_dof, n_dof))
         return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
+
+    def compiled_force(self, n_dof: int) -> Any:
+        """Numba kernel of :meth:`ode_force` (the table's), or None without Numba."""
+        self._check(n_dof)
+        return self.table.compiled(self._index, self._f0)
 
     def describe(self) -> str:
         n_h, n_v = self.table.dataset.sizes["l_h"], self.table.dataset.sizes["l_v"]

@@ -362,6 +362,13 @@ class MorisonDrag(KnownComponent):
         """Drag at one time ``t`` for rates ``zdot`` of shape (n_dof,) or (batch, n_dof)."""
         return self.generalised_force(t, zdot)
 
+    def compiled_force(self, n_dof: int) -> Any:
+        """Numba kernel of :meth:`ode_force` for one state, or None without Numba."""
+        from hybridwsi.forces._compiled import morison_force
+
+        self._check(n_dof)
+        return morison_force(self.coef, self._jx, self._jy, self._two_d, self._wave)
+
     def _check_history(self, hist: xr.Dataset) -> None:
         dofs = tuple(str(d) for d in hist["dof"].values)
         if dofs != self.dofs:

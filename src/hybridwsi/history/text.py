@@ -302,10 +302,18 @@ def detect_separator(header_line: str) -> str:
 def _read_columns(path: Path, sep: str, skip: int, use: list[int], width: int) -> np.ndarray:
     """Columns ``use`` of a table as correctly rounded floats (exact ``to_csv`` round trip).
 
-    NumPy's C reader when most columns are wanted (the fastest exact parser here); pandas' C
-    tokenizer with round-trip conversion when few of many are (it converts only those).
+    Apache Arrow's multi-threaded CSV reader when installed and the separator is one
+    character (its float parser is correctly rounded, and it converts only the wanted
+    columns); when it is missing or refuses the file, NumPy's C reader when most columns are
+    wanted and pandas' C tokenizer with round-trip conversion when few of many are. A parse
+    failure of those raises ValueError, and the caller falls back to the string parse (which
+    reports line numbers).
     """
     delimiter = None if sep == "whitespace" else sep
+    if delimiter is not None:
+        data = _read_columns_arrow(path, delimiter, skip, use)
+        if data is not None:
+            return data
     if 4 * len(use) >= width:
         return np.loadtxt(path, delimiter=delimiter, skiprows=skip, usecols=use,
                           dtype=np.float64, encoding="latin-1", ndmin=2, comments=None)
@@ -315,6 +323,37 @@ def _read_columns(path: Path, sep: str, skip: int, use: list[int], width: int) -
                         names=range(width), usecols=use, skiprows=skip, dtype=np.float64,
                         engine="c", encoding="latin-1", float_precision="round_trip")
     return frame[use].to_numpy()
+
+
+def _read_columns_arrow(path: Path, delimiter: str, skip: int, use: list[int]
+                        ) -> np.ndarray | None:
+    """:func:`_read_columns` with ``pyarrow.csv``; None when pyarrow is not installed or
+    cannot read the file as plain numbers.
+
+    Quoting is off (a quoted number is not a number here) and every wanted column is typed
+    float64, so text in it raises instead of becoming a string column.
+    """
+    try:
+        import pyarrow as pa
+        import pyarrow.csv as pacsv
+    except ImportError:
+        return None
+    try:
+        table = pacsv.read_csv(
+            path,
+            read_options=pacsv.ReadOptions(skip_rows=skip, autogenerate_column_names=True),
+            parse_options=pacsv.ParseOptions(delimiter=delimiter, quote_char=False),
+            convert_options=pacsv.ConvertOptions(
+                include_columns=[f"f{j}" for j in use],
+                column_types={f"f{j}": pa.float64() for j in use}))
+    except (pa.ArrowException, ValueError):
+        return None  # e.g. blanks around numbers, short rows: the other readers decide
+    if table.num_rows == 0 or any(table.column(k).null_count for k in range(len(use))):
+        return None  # empty fields: the other readers decide
+    out = np.empty((table.num_rows, len(use)))
+    for k in range(len(use)):
+        out[:, k] = table.column(k).to_numpy()
+    return out
 
 
 def _fields_fit(path: Path, header_idx: int, sep: str, width: int,
@@ -363,23 +402,44 @@ def _fields_fit(path: Path, header_idx: int, sep: str, width: int,
     return True
 
 
-def _read_head(path: Path, n_bytes: int) -> list[str] | None:
-    """The first complete lines of a text file (at most ``n_bytes``), with the checks of
-    :func:`read_text_file` on them; None when the whole file is that short (read it all)."""
+def _read_head(path: Path, n_bytes: int, max_bytes: int = 1 << 26) -> list[str] | None:
+    """The first complete lines of a text file, up to and including the header line, with
+    the checks of :func:`read_text_file` on them; None when the whole file is short (read it
+    all) or no header line ends within ``max_bytes``.
+
+    Reads ``n_bytes`` and doubles while no complete non-comment line has been seen (a
+    10 000-column header is longer than the first read).
+    """
     if not path.is_file() or path.stat().st_size <= n_bytes:
         return None
     try:
         with open(path, "rb") as f:
             data = f.read(n_bytes)
+            while not _has_header_line(data):
+                more = f.read(len(data)) if len(data) < max_bytes else b""
+                if not more:
+                    return None
+                data += more
     except OSError as exc:
         raise InputError(f"cannot read {path}: {exc.strerror or exc}") from None
-    if data.startswith(NETCDF_MAGIC) or b"\x00" in data or b"\n" not in data:
+    if data.startswith(NETCDF_MAGIC) or b"\x00" in data:
         return None  # let read_text_file say what it is
     data = data[: data.rindex(b"\n")]
     try:
         return data.decode("utf-8-sig").splitlines()
     except UnicodeDecodeError:
         return None
+
+
+def _has_header_line(data: bytes) -> bool:
+    """Whether ``data`` holds a complete line that is neither blank nor a ``#`` comment."""
+    end = data.rfind(b"\n")
+    if data.startswith(NETCDF_MAGIC) or b"\x00" in data:
+        return True  # binary: stop reading, the caller refuses it
+    if end < 0:
+        return False
+    return any(line.strip() and not line.strip().startswith(b"#")
+               for line in data[:end].splitlines())
 
 
 def read_text_file(path: Path) -> str:

@@ -495,13 +495,20 @@ def _n_jobs(n_jobs: int | None) -> int | None:
     return n
 
 
-def _auto_jobs(n_freq: int, panels: int) -> int:
+def _auto_jobs(n_freq: int, mesh: Any) -> int:
     """Usable CPUs when the sweep is long enough to repay the workers' start-up (~3 s each):
-    an estimated sequential time > 30 s (about 0.5 s per frequency at 6400 hull panels, growing
-    like panels^1.5 with the axisymmetric solver), else 1."""
+    an estimated sequential time > 30 s, else 1.
+
+    The estimate per frequency at 6400 hull panels is about 0.5 s on a rotation-symmetric
+    mesh (growing like panels^1.5) and about 68 s on a plain mesh (dense solve, panels^2;
+    ``benchmarks/bench_bem.py``); a mesh with other symmetries is costed as plain (an upper
+    bound, which only makes the pool start sooner).
+    """
     avail = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
     cpus = max(1, len(avail) if avail else (os.cpu_count() or 1))
-    estimate = n_freq * 0.5 * (panels / 6400.0) ** 1.5
+    scale = int(mesh.nb_faces) / 6400.0
+    rotational = "RotationSymmetric" in type(mesh).__name__
+    estimate = n_freq * (0.5 * scale**1.5 if rotational else 68.0 * scale**2)
     return cpus if estimate > 30.0 else 1
 
 
@@ -551,7 +558,7 @@ def _solve_missing(p: Plan, todo, store, store_path, *, progress, chunk_size, n_
                 low_mesh=p.low_kh_mesh)
     cbody, _ = _body_and_solver(p.body, p.dofs, p.mesh, p.symmetric, p.lid, p.method)
     _warn_mesh_resolution(cbody, finite, p.depth, p.body.g)
-    n_jobs = _auto_jobs(finite.size, int(cbody.mesh.nb_faces)) if n_jobs is None else n_jobs
+    n_jobs = _auto_jobs(finite.size, cbody.mesh) if n_jobs is None else n_jobs
     if n_jobs > 1:  # chunks small enough to keep every worker busy
         chunk_size = max(1, min(chunk_size, -(-finite.size // (2 * n_jobs))))
     chunks = [finite[i:i + chunk_size] for i in range(0, finite.size, chunk_size)]
