@@ -27,7 +27,7 @@ CASE = load_case("oc3_hywind")
 @pytest.fixture(scope="module")
 def section(tmp_path_factory) -> tuple[Path, str]:
     out = tmp_path_factory.mktemp("report")
-    md = fowt.run_fowt(out, quick=True, progress=False)
+    md = fowt.run_fowt(out, quick=True, progress=False, hybrid=False)  # hybrid: test_fowt_hybrid
     return out / "fowt", md
 
 

@@ -11,6 +11,9 @@ coefficients (``bem_oc3_hywind.nc``, taken without solving when the inputs match
   radiation state space, the mooring as its linearised stiffness, the additional linear damping);
 - ``fowt/rao.png`` / ``.nc`` / ``.json``: steady-state amplitudes in regular waves from the time
   domain against the frequency-domain solution of the same linear system.
+- ``fowt/diagnostic.json``, ``fowt/hybrid.json``, ``fowt/hybrid_rollout.png`` / ``.nc``: the
+  stability diagnostic in surge, heave and pitch and the 3-DOF hybrid in irregular seas
+  (:mod:`hybridwsi.report.fowt_hybrid`, issue 13 items 7–8).
 
 The linear system of decays and RAOs (no Morison drag, no mooring nonlinearity):
 
@@ -46,6 +49,7 @@ from hybridwsi.history import mean_crossing_period
 from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
+from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
 from hybridwsi.report.plots import save
 from hybridwsi.waves import Regular, excitation_force
 
@@ -248,10 +252,14 @@ def rao_figure(points: Sequence[dict[str, Any]], omegas: np.ndarray, curve: np.n
     return fig, ds
 
 
-def run_fowt(out: Path, *, quick: bool = False, progress: bool = False) -> str:
-    """Write ``out/fowt/`` (mooring, natural frequencies, decays, RAOs) and return Markdown.
+def run_fowt(out: Path, *, quick: bool = False, progress: bool = False,
+             hybrid: bool = True) -> str:
+    """Write ``out/fowt/`` (mooring, natural frequencies, decays, RAOs and, with ``hybrid``,
+    the multi-DOF diagnostic and the hybrid of :mod:`hybridwsi.report.fowt_hybrid`) and
+    return Markdown.
 
-    ``quick`` shortens the surge decay and the regular-wave runs and uses 5 wave periods.
+    ``quick`` shortens the surge decay and the regular-wave runs and uses 5 wave periods, and
+    the irregular seas of the hybrid (``[hybrid] quick_duration``, ``quick_long_duration``).
     """
     start = time.time()
 
@@ -304,11 +312,14 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False) -> str:
     save(fig, folder / "rao.png")
     ds.to_netcdf(folder / "rao.nc")
     log("RAOs")
-    return fowt_markdown(mooring, nat, points, time.time() - start)
+    hybrid_md = run_fowt_hybrid(folder, case, coeffs,
+                                *linear_forces(case, k6, case["hybrid"]["dofs"]),
+                                write_json=_write_json, quick=quick, log=log) if hybrid else ""
+    return fowt_markdown(mooring, nat, points, time.time() - start, hybrid_md)
 
 
 def fowt_markdown(mooring: dict[str, Any], nat: dict[str, Any],
-                  points: Sequence[dict[str, Any]], wall: float) -> str:
+                  points: Sequence[dict[str, Any]], wall: float, hybrid_md: str = "") -> str:
     """The report section."""
     k = np.asarray(mooring["K"])
     ref = mooring["reference"]
@@ -329,5 +340,5 @@ def fowt_markdown(mooring: dict[str, Any], nat: dict[str, Any],
               f"steady state vs the frequency-domain solution of the same linear system, "
               f"largest difference {100 * worst:.3f} %.", "",
               "![decays](fowt/decay.png)", "", "![RAOs](fowt/rao.png)", "",
-              f"Section wall time {wall:.0f} s.", ""]
+              hybrid_md, f"Section wall time {wall:.0f} s.", ""]
     return "\n".join(lines)
