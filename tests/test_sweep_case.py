@@ -16,7 +16,7 @@ pytest.importorskip("zarr")
 pytest.importorskip("moorpy")
 
 from hybridwsi import cummins, sweep
-from hybridwsi.cases import load_case
+from hybridwsi.cases import case_coefficients, load_case
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
 from hybridwsi.forces import MooringForce, MooringSystem, MorisonDrag, additional_damping
@@ -160,7 +160,7 @@ def test_case_sweep_resumed_equals_uninterrupted(tmp_path, config, monkeypatch):
     forces = [MooringForce.from_case(spec, OC3_DOFS),
               MorisonDrag.from_case(spec, OC3_DOFS, wave=wave, ramp=config.ramp),
               additional_damping(spec, OC3_DOFS)]
-    direct = cummins.simulate(sweep.case_coefficients(spec), dofs=OC3_DOFS,
+    direct = cummins.simulate(case_coefficients(spec), dofs=OC3_DOFS,
                               duration=config.duration, dt=config.dt, ramp=config.ramp,
                               wave=wave, forces=forces)
     np.testing.assert_allclose(hist["z"].values, direct["z"].values, rtol=1e-10, atol=1e-12)
@@ -207,7 +207,7 @@ def test_heave_statistics_match_the_frequency_domain(tmp_path):
     std_td = stats["cases"]["hs6_tp10_s0"]["Heave"]["std"]
 
     spec, dofs = load_case("oc3_hywind"), ["Heave"]
-    coeffs = sweep.case_coefficients(spec)
+    coeffs = case_coefficients(spec)
     k33 = MooringSystem.from_case(spec).stiffness()[2:3, 2:3]  # MoorPy's analytic K33
     b_add = additional_damping(spec, dofs).linear_coefficients(1)[1]
     var, t0 = 0.0, np.zeros(1)

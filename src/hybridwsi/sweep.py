@@ -233,23 +233,10 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
     )
 
 
-def case_coefficients(spec: dict) -> xr.Dataset:
-    """A case's coefficients: ``bem.compute`` on its ``[bem]`` table, which returns the
-    shipped file without solving when the inputs match (OC3-Hywind: ``bem_oc3_hywind.nc``)."""
-    import warnings
-
-    from hybridwsi.cases import bem_arguments
-    from hybridwsi.hydro import bem
-
-    with warnings.catch_warnings():  # Capytaine's chatter on loading
-        warnings.simplefilter("ignore")
-        return bem.compute(**bem_arguments(spec), progress=False)
-
-
 def sweep_coefficients(manifest: dict) -> xr.Dataset:
     """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
     was given, else its case's (:func:`case_coefficients`), else the paper sphere's."""
-    from hybridwsi.cases import load_case
+    from hybridwsi.cases import case_coefficients, load_case
 
     cfg = manifest.get("config", {})
     if cfg.get("coeffs"):
@@ -297,7 +284,7 @@ def case_setup(config: SweepConfig) -> dict:
     Returns ``{"_case": the case dict, "_dofs", "_coeffs", "_radiation_ss",
     "_mooring_table"}`` (the table None when the case has no mooring).
     """
-    from hybridwsi.cases import load_case
+    from hybridwsi.cases import case_coefficients, load_case
     from hybridwsi.forces import MooringForce
     from hybridwsi.hydro import coefficients as cf
 
