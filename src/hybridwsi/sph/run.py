@@ -36,7 +36,6 @@ def make_equations(case: SPHCase) -> list:
     from pysph.sph.equation import Group
     from pysph.sph.wc.basic import MomentumEquation, TaitEOS
 
-    from hybridwsi.sph.mdbc import body_boundary_post
     from hybridwsi.sph.equations import (
         BodyForceReduce,
         DampingZone,
@@ -46,6 +45,7 @@ def make_equations(case: SPHCase) -> list:
         WallForce,
         WallPressureAdami,
     )
+    from hybridwsi.sph.mdbc import body_boundary_post
 
     gx, gy, gz = case.gvec
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
