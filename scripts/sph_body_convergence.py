@@ -45,20 +45,22 @@ def exact_hold_force(dim: int, g: float) -> float:
 
 
 def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarter",
-            symmetry: str = "mirror") -> dict:
+            symmetry: str = "mirror", boundary: str = "shepard") -> dict:
     if dim == 3:
         case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
                             smooth_body=smooth, t_release=0.3, domain=domain,
-                            symmetry=symmetry)
+                            symmetry=symmetry, boundary=boundary)
     else:
         case = tank.decay2d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
-                            smooth_body=smooth, t_release=0.3)
+                            smooth_body=smooth, t_release=0.3, boundary=boundary)
     t0 = time.monotonic()
     hist = run_case(case, progress=False)
     res = {"dim": dim, "dp": dp, "R_over_dp": R / dp, "smooth_body": smooth, "hdx": hdx,
            "n_particles": case.n_particles, "wall_s": round(time.monotonic() - t0, 1),
            "hold_force": hist["F_tot"].attrs["hold_mean"],
            "hold_force_exact": exact_hold_force(dim, case.g)}
+    if boundary != "shepard":  # the records before the option stay valid
+        res["boundary"] = boundary
     if dim == 3:
         res.update(domain=domain, symmetry=symmetry)
         cmp = compare_decay(hist, Z0, z_eq=0.0)
@@ -76,7 +78,8 @@ def _key(r: dict) -> tuple:
     # results written before issue 15 were quarter domains with wall planes
     return (r["dim"], r["dp"], r["smooth_body"], r["hdx"],
             r.get("domain", "quarter") if r["dim"] == 3 else "full",
-            r.get("symmetry", "wall") if r["dim"] == 3 else "none")
+            r.get("symmetry", "wall") if r["dim"] == 3 else "none",
+            r.get("boundary", "shepard"))
 
 
 def main() -> None:
@@ -91,6 +94,8 @@ def main() -> None:
                     default=["quarter"], help="3D domains (default quarter)")
     ap.add_argument("--symmetry", nargs="*", choices=["mirror", "wall"], default=["mirror"],
                     help="3D symmetry planes: true mirror planes or fixed walls")
+    ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
+                    help="body-particle pressure (hybridwsi.sph.mdbc for mdbc)")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -107,12 +112,13 @@ def main() -> None:
                                                          extra):
             if dim == 3 and dom == "full" and sym == "wall":
                 continue  # a full domain has no planes: one run covers both
-            key = (dim, dp, sm, hdx, dom, sym)
+            key = (dim, dp, sm, hdx, dom, sym, a.boundary)
             if any(_key(r) == key for r in done):
                 continue
             print(f"running dim={dim} dp={dp} smooth={sm} hdx={hdx} domain={dom} "
                   f"symmetry={sym}", flush=True)
-            done.append(run_one(dim, dp, sm, hdx, *((dom, sym) if dim == 3 else ())))
+            done.append(run_one(dim, dp, sm, hdx, *((dom, sym) if dim == 3 else ()),
+                                boundary=a.boundary))
             print(json.dumps(done[-1]), flush=True)
             text = "".join(json.dumps(r) + "\n" for r in done)
             atomic_write(path, lambda tmp, text=text: Path(tmp).write_text(text))

@@ -44,6 +44,12 @@ def main() -> None:
     ap.add_argument("--domain", choices=["quarter", "half", "full"], default="quarter")
     ap.add_argument("--symmetry", choices=["mirror", "wall"], default="mirror")
     ap.add_argument("--hdx", type=float, default=None, help="h/dp (default the case's)")
+    ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
+                    help="body-particle pressure: Adami/Shepard at the particle or first-order "
+                         "mDBC at its mirror node (hybridwsi.sph.mdbc)")
+    ap.add_argument("--relax", type=float, default=0.0,
+                    help="damped relaxation until the rms fluid speed is below RELAX sqrt(g d) "
+                         "(--settle is then its longest duration); 0: a fixed settling time")
     a = ap.parse_args()
     if a.periods < 5:
         ap.error("--periods must be at least 5 (the gate averages over >= 5 acoustic periods)")
@@ -52,8 +58,13 @@ def main() -> None:
     path = out / "static_gate.jsonl"
     setup = {"dp": a.dp, "depth": a.depth, "half_width": a.half_width, "periods": a.periods,
              "settle": a.settle, "domain": a.domain, "symmetry": a.symmetry, "hdx": a.hdx}
+    if a.boundary != "shepard":
+        setup["boundary"] = a.boundary  # the records of the shepard runs stay valid
+    if a.relax > 0.0:
+        setup["relax"] = a.relax
     done = [json.loads(s) for s in path.read_text().splitlines()] if path.exists() else []
     kw = {"hdx": a.hdx} if a.hdx is not None else {}
+    kw.update(boundary=a.boundary, relax=a.relax)
     for z in static_gate.HEIGHTS:
         if any(r["setup"] == setup and r["z"] == z for r in done):
             continue

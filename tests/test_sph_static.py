@@ -42,10 +42,12 @@ def test_gate_fails_on_a_buoyancy_or_stiffness_error():
 @pytest.mark.sph
 def test_static_gate_machinery_coarse():
     # R/dp = 4 in a small quarter tank with mirror planes, each height averaged over 5
-    # acoustic periods. At this resolution the zeroth-order body boundary leaves a bias of
-    # about 2 % of the weight at equilibrium (issue 15's review measured +1.6 N of 69 N in
-    # the full domain at D/8), so the coarse bounds are 3 % of the weight and 5 % of the
-    # stiffness; the 0.5 % / 1 % gate itself is for D/10 and finer (scripts/sph_static_gate.py)
+    # acoustic periods. At this resolution the body's particle boundary stands the fluid off
+    # a little too far (an effective sphere ~1 mm too large), a bias of about 1.7 % of the
+    # weight at equilibrium and -2.1 % of the stiffness (docs/SPH_RUNS.md: neither the
+    # first-order mDBC boundary, +4.0 % / -2.3 % here, nor a damped relaxation removes it),
+    # so the coarse bounds are 2.5 % of the weight and 3.5 % of the stiffness; the 0.5 % / 1 %
+    # gate itself is for D/10 and finer (scripts/sph_static_gate.py) and does not pass yet
     pytest.importorskip("pysph")
     res = [static_gate.held_force(0.0375, z, depth=0.3, half_width=0.3, settle=0.05)
            for z in static_gate.HEIGHTS]
@@ -54,5 +56,5 @@ def test_static_gate_machinery_coarse():
         assert r["t_avg"] >= 5 * 4 * 0.3 / (10 * math.sqrt(tank.KRAMER_G * 0.3)) - 1e-12
         assert r["std"] < 0.05 * r["exact"]
     g = static_gate.gate(res)
-    assert abs(g["buoyancy_error"]) < 0.03, g
-    assert abs(g["stiffness_error"]) < 0.05, g
+    assert abs(g["buoyancy_error"]) < 0.025, g
+    assert abs(g["stiffness_error"]) < 0.035, g

@@ -103,6 +103,9 @@ def test_free_circle_released_above_equilibrium():
     # the ghosts are made again from them on resume
     ("decay3d", {"dp": 0.0375, "depth": 0.3, "half_width": 0.3, "tf": 0.03, "t_release": 0.0,
                  "smooth_body": False}, 20),
+    # damped relaxation: the release time chosen before the interruption is restored
+    ("decay2d", {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "tf": 0.03,
+                 "t_release": 0.3, "relax": 0.003}, 250),
 ])
 def test_resume_gives_the_uninterrupted_result(tmp_path, name, kw, stop):
     ref = run_case(tank.build(name, **kw), progress=False)
@@ -208,3 +211,28 @@ def test_sponge_absorbs_the_waves_the_body_radiates():
     assert late[0.3] < 0.5 * late[0.0]
     with pytest.raises(InputError, match="sponge"):
         tank.decay2d(dp=0.03, half_width=0.75, sponge=0.7)
+
+
+def test_relaxation_damps_the_hold_and_releases_when_the_fluid_is_at_rest():
+    # the held circle's fluid jitters at ~5e-3 sqrt(g d) rms after its lattice start; the
+    # damped relaxation brings it below 3e-3 sqrt(g d) and releases the body at the first
+    # sample after one acoustic period 4 d / c0 where it is, well before the longest hold;
+    # undamped, the fluid is still above that level then
+    from hybridwsi.sph.run import fluid_urms
+
+    kw = {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "t_release": 0.3,
+          "free": False, "tf": 0.01}
+    relaxed = tank.decay2d(relax=0.003, **kw)
+    hist = run_case(relaxed, progress=False)
+    limit = 0.003 * math.sqrt(tank.G * 0.45)
+    assert relaxed.relax_urms == pytest.approx(limit)
+    assert relaxed.relax_tmin == pytest.approx(4 * 0.45 / relaxed.c0)
+    assert relaxed.relax_tmin <= relaxed.t_release < 0.3 - 1e-9
+    assert '"relax": 0.003' in hist.attrs["inputs"]
+    assert float(hist["time"].values[0]) == 0.0  # the history starts at the release
+    plain = tank.decay2d(**dict(kw, t_release=relaxed.t_release))
+    run_case(plain, progress=False)
+    assert fluid_urms(plain.fluid) > limit
+    assert fluid_urms(relaxed.fluid) < fluid_urms(plain.fluid) / 1.5
+    with pytest.raises(InputError, match="relax"):
+        tank.decay2d(relax=-1.0, **kw)

@@ -157,6 +157,19 @@ class DampingZone(Equation):
             d_aw[d_idx] -= sig * d_w[d_idx]
 
 
+class HoldRelaxation(Equation):
+    """Damped relaxation of the fluid before a body is released: a -= sigma v while
+    t < ``relax[1]`` [s], with sigma = ``relax[0]`` [1/s] (fluid constant ``relax``; the run
+    ends the relaxation when the fluid's kinetic energy falls below a threshold, see
+    :func:`hybridwsi.sph.run.run_case`). Zero ``relax`` (every case by default) does nothing."""
+
+    def post_loop(self, d_idx, d_u, d_v, d_w, d_au, d_av, d_aw, d_relax, t):
+        if t < d_relax[1]:
+            d_au[d_idx] -= d_relax[0] * d_u[d_idx]
+            d_av[d_idx] -= d_relax[0] * d_v[d_idx]
+            d_aw[d_idx] -= d_relax[0] * d_w[d_idx]
+
+
 class WallForce(Equation):
     """Force [N] on each floating-body particle from the fluid: the exact reaction of the
     pressure + artificial-viscosity terms that the fluid feels from it in MomentumEquation,

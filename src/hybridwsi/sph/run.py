@@ -41,9 +41,11 @@ def make_equations(case: SPHCase) -> list:
         DampingZone,
         DensityDiffusionFourtakas,
         GravityRamp,
+        HoldRelaxation,
         WallForce,
         WallPressureAdami,
     )
+    from hybridwsi.sph.mdbc import body_boundary_post
 
     gx, gy, gz = case.gvec
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
@@ -52,9 +54,11 @@ def make_equations(case: SPHCase) -> list:
     return [
         Group(equations=[TaitEOS("fluid", None, rho0=case.rho0, c0=case.c0, gamma=case.gamma)],
               real=False, name="eos"),
+        # mDBC: the body particles' density is then overwritten from their mirror nodes
         Group(equations=[WallPressureAdami("wall", ["fluid"], rho0=case.rho0, c0=case.c0,
                                            gamma=case.gamma, **grav)], real=False,
-              name="wall_bc"),
+              name="wall_bc", post=body_boundary_post(case) if case.boundary == "mdbc"
+              else None),
         Group(equations=[
             ContinuityEquation("fluid", ["fluid", "wall"]),
             DensityDiffusionFourtakas("fluid", ["fluid"], delta=case.delta, c0=case.c0,
@@ -64,6 +68,7 @@ def make_equations(case: SPHCase) -> list:
             MomentumEquation("fluid", ["fluid"], c0=case.c0, alpha=case.alpha, beta=0.0),
             MomentumEquation("fluid", ["wall"], c0=case.c0, alpha=alpha_wall, beta=0.0),
             GravityRamp("fluid", None, **grav),
+            HoldRelaxation("fluid", None),
             DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma,
                         radial=int(case.damping_radial), dim=case.dim),
             XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps),
@@ -227,9 +232,30 @@ def read_checkpoint(path: Path, case: SPHCase) -> tuple[int, list[dict[str, Any]
                                  f"particles, the case has {n}")
             getattr(pa, prop)[:] = arr
         for const in pa.constants:
-            getattr(pa, const)[:] = data[f"{pa.name}/c/{const}"]
+            key = f"{pa.name}/c/{const}"
+            if key in data:  # checkpoints from before the relaxation have no ``relax``
+                getattr(pa, const)[:] = data[key]
     rows = _arrays_to_rows({k[5:]: v for k, v in data.items() if k.startswith("rows/")})
     return int(data["_count"]), rows
+
+
+# --------------------------------------------------------------------------- relaxation
+def fluid_urms(fluid: Any) -> float:
+    """Root-mean-square speed [m/s] of the real fluid particles."""
+    n = n_real(fluid)
+    return float(np.sqrt(np.mean(fluid.u[:n] ** 2 + fluid.v[:n] ** 2 + fluid.w[:n] ** 2)))
+
+
+def _set_release(case: SPHCase, t_release: float, tf_after: float) -> None:
+    """Release the body (and end the fluid's relaxation) at ``t_release`` [s], an output
+    sample; the run then lasts ``tf_after`` [s] beyond it. As at construction, the body is
+    free from the force evaluation half a step before the release sample."""
+    from hybridwsi.sph.equations import B_TREL
+
+    case.t_release = t_release
+    case.tf = tf_after + t_release
+    case.wall.body[B_TREL] = t_release - 0.75 * case.dt
+    case.fluid.relax[1] = t_release
 
 
 # --------------------------------------------------------------------------- driver
@@ -262,7 +288,6 @@ def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
     from tqdm.auto import tqdm
 
     dt = case.dt
-    n_total = round(case.tf / dt)
     nsub = max(1, round(case.output_dt / dt))
     if checkpoint is None and out is not None:
         checkpoint = Path(str(out) + ".ckpt.npz")
@@ -270,13 +295,20 @@ def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
     solver = make_solver(case, openmp=openmp)
     integ = solver.integrator
     count, rows = 0, []
+    relaxing = case.relax_urms > 0.0 and case.t_release > 0.0
+    tf_after = case.tf - case.t_release
     if resume and ckpt is not None and ckpt.is_file():
         count, rows = read_checkpoint(ckpt, case)
         solver.nnps.update_domain()  # the mirror ghosts of the restored particles
+        if relaxing:  # the release time the interrupted run had chosen (body[B_TREL])
+            _set_release(case, round((case.wall.body[16] + 0.75 * dt) / dt) * dt, tf_after)
     else:
+        if relaxing:
+            case.fluid.relax[:] = [case.relax_sigma, case.t_release]
         # PEC uses the accelerations of the previous evaluation in its predictor
         integ.initial_acceleration(0.0, dt)
         rows = [_sample(case, 0.0)]
+    n_total = round(case.tf / dt)
     last_ckpt = _time.monotonic()
     bar = tqdm(total=n_total, initial=count, disable=not progress, unit="step",
                desc=f"SPH {case.name} ({case.n_particles} particles)", mininterval=1.0)
@@ -290,6 +322,14 @@ def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
                 rows.append(_sample(case, count * dt))
                 if not np.isfinite(rows[-1]["F_tot"]) or not np.all(np.isfinite(case.fluid.rho)):
                     raise SolverError(f"SPH run {case.name} diverged at t = {count * dt:.4g} s")
+                # not before one acoustic period: the fluid starts at rest and its jitter
+                # (~5e-3 sqrt(g d) undamped) builds up over the first one
+                if (relaxing and case.relax_tmin <= count * dt < case.fluid.relax[1] - 0.5 * dt
+                        and fluid_urms(case.fluid) < case.relax_urms):
+                    # at rest: release at the next sample (PEC's release needs a step ahead)
+                    _set_release(case, (count + nsub) * dt, tf_after)
+                    n_total = round(case.tf / dt)
+                    bar.total = n_total
             bar.update(1)
             if ckpt is not None and _time.monotonic() - last_ckpt > checkpoint_every:
                 write_checkpoint(ckpt, case, count, rows)

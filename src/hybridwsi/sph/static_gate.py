@@ -40,25 +40,34 @@ def acoustic_period(case: tank.SPHCase) -> float:
 
 def held_force(dp: float, z: float, *, depth: float = 0.45, half_width: float = 0.45,
                n_periods: float = 5.0, settle: float = 0.1, domain: str = "quarter",
-               symmetry: str = "mirror", **case_kw: Any) -> dict[str, float]:
+               symmetry: str = "mirror", relax: float = 0.0, **case_kw: Any
+               ) -> dict[str, float]:
     """Run the sphere held at z [m] and return the mean and standard deviation [N] of the
     whole body's fluid force over ``n_periods`` acoustic periods after ``settle`` [s].
 
-    ``case_kw`` go to :func:`hybridwsi.sph.tank.decay3d` (e.g. ``hdx``)."""
+    With ``relax`` > 0 the settling is the damped relaxation of
+    :func:`hybridwsi.sph.tank.decay3d` (``relax``: the rms fluid speed that ends it, as a
+    fraction of sqrt(g depth)) and ``settle`` is its longest duration; the average starts
+    where it ends (``t_settled`` [s] in the result). ``case_kw`` go to
+    :func:`hybridwsi.sph.tank.decay3d` (e.g. ``hdx``, ``boundary``)."""
     from hybridwsi.sph.run import run_case
 
-    probe = tank.decay3d(dp=dp, depth=depth, half_width=half_width, tf=0.01, free=False,
-                         t_release=0.0, z0_over_d=z / tank.SPHERE_D, domain=domain,
-                         symmetry=symmetry, **case_kw)
-    t_avg = n_periods * acoustic_period(probe)
-    case = tank.decay3d(dp=dp, depth=depth, half_width=half_width, tf=settle + t_avg,
-                        free=False, t_release=0.0, z0_over_d=z / tank.SPHERE_D, domain=domain,
-                        symmetry=symmetry, **case_kw)
-    hist = run_case(case, progress=False)
-    t = hist["time"].values
-    f = hist["F_fluid"].values[:, 0][t >= settle - 1e-9]
+    kw = dict(dp=dp, depth=depth, half_width=half_width, free=False,
+              z0_over_d=z / tank.SPHERE_D, domain=domain, symmetry=symmetry, **case_kw)
+    t_avg = n_periods * acoustic_period(tank.decay3d(tf=0.01, t_release=0.0, **kw))
+    if relax > 0.0:
+        # the history starts where the relaxation ends (the "release" of a held body)
+        case = tank.decay3d(tf=t_avg, t_release=settle, relax=relax, **kw)
+        hist = run_case(case, progress=False)
+        t_settled = case.t_release
+        f = hist["F_fluid"].values[:, 0]
+    else:
+        case = tank.decay3d(tf=settle + t_avg, t_release=0.0, **kw)
+        hist = run_case(case, progress=False)
+        t_settled = settle
+        f = hist["F_fluid"].values[:, 0][hist["time"].values >= settle - 1e-9]
     return {"z": z, "mean": float(np.mean(f)), "std": float(np.std(f)), "t_avg": t_avg,
-            "n_samples": int(len(f)), "n_particles": case.n_particles,
+            "n_samples": int(len(f)), "n_particles": case.n_particles, "t_settled": t_settled,
             "exact": exact_fluid_force(z, g=case.g)}
 
 

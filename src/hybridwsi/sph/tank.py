@@ -83,6 +83,19 @@ class SPHCase:
     #: axes whose zero plane is a true mirror-symmetry plane (0: x = 0, 1: y = 0; 3D only):
     #: the run adds ghost images of every particle near them (:mod:`hybridwsi.sph.symmetry`)
     mirror: tuple[int, ...] = ()
+    #: body-particle pressure: ``"shepard"`` (Adami's extrapolation at the particle, the
+    #: shipped runs) or ``"mdbc"`` (first order at the mirror node, :mod:`hybridwsi.sph.mdbc`)
+    boundary: str = "shepard"
+    #: analytic body surface for mDBC: (centre at equilibrium [m], radius [m])
+    body_surface: tuple[tuple[float, ...], float] | None = None
+    #: pre-release relaxation (:func:`hybridwsi.sph.run.run_case`): the fluid is damped at
+    #: ``relax_sigma`` [1/s] during the hold, which ends (and the body is released) at the
+    #: first sample where the fluid's rms velocity is below ``relax_urms`` [m/s]; the hold
+    #: ``t_release`` is then the longest hold. 0: the fixed hold of the shipped runs.
+    relax_urms: float = 0.0
+    relax_sigma: float = 0.0
+    #: the relaxation lasts at least this long [s] (one acoustic period 4 d / c0)
+    relax_tmin: float = 0.0
 
     @property
     def h(self) -> float:
@@ -221,6 +234,8 @@ def _arrays(case_dim: int, fluid_pts: np.ndarray, wall_pts: np.ndarray, flags: n
             if prop not in pa.properties:
                 pa.add_property(prop)
         pa.cs[:] = c0
+    # [damping rate 1/s, end time s] of the pre-release relaxation (off: zeros)
+    fluid.add_constant("relax", np.zeros(2))
     wall.flag[:] = flags
     wall.xi[:], wall.yi[:], wall.zi[:] = wall.x, wall.y, wall.z
     wall.add_constant("body", np.zeros(N_BODY))
@@ -241,9 +256,9 @@ def _c0(g: float, height: float, factor: float) -> float:
 # --------------------------------------------------------------------------- probes
 def _wendland_quintic(r: np.ndarray, h: np.ndarray, dim: int) -> np.ndarray:
     """Wendland quintic kernel W(r, h) [1/m^dim], the one the solver uses (support 2h)."""
-    q = r / h
-    fac = (7.0 / (4.0 * math.pi) if dim == 2 else 21.0 / (16.0 * math.pi)) / h ** dim
-    return np.where(q < 2.0, fac * (1.0 - 0.5 * q) ** 4 * (2.0 * q + 1.0), 0.0)
+    from hybridwsi.sph.mdbc import wendland_quintic
+
+    return wendland_quintic(r, h, dim)[0]
 
 
 def fluid_fraction(fluid, points: np.ndarray, dim: int) -> np.ndarray:
@@ -500,7 +515,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
                hdx: float = BODY_HDX, t_release: float = 0.0,
                smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
-               symmetry: str = "mirror") -> SPHCase:
+               symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0
+               ) -> SPHCase:
     """Half-submerged circle (2D) or sphere (3D) released from z0 [m] above equilibrium.
 
     ``domain`` (3D): ``"quarter"`` (symmetry planes x = 0 and y = 0; the default without a
@@ -515,8 +531,19 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     held for ``t_release`` [s] before it is released (``tf`` counts from the release).
     ``smooth_body`` builds the body from concentric particle shells (:func:`round_shell`)
     instead of the lattice points inside it, whose staircase surface acts as roughness.
+    ``boundary``: ``"shepard"`` (Adami's wall extrapolation at each body particle, the
+    shipped runs) or ``"mdbc"`` (first-order extrapolation at its mirror node across the
+    sphere, :mod:`hybridwsi.sph.mdbc`).
+    ``relax`` (> 0, with a hold): a damped relaxation instead of a fixed hold -- the fluid's
+    velocities are damped at half the tank's lowest acoustic angular frequency,
+    pi c0 / (4 depth), and the body is released at the first sample where the fluid's rms
+    velocity is below ``relax`` sqrt(g depth), after at least one acoustic period 4 depth / c0
+    (``t_release`` is then the longest hold).
     ``sponge`` [m] (decay cases) is the width of an absorbing layer along the side walls, so that
     the waves the body radiates are not reflected back onto it."""
+    _check_boundary(boundary)
+    if not (math.isfinite(relax) and relax >= 0.0):
+        raise InputError(f"relax must be a non-negative fraction of sqrt(g d), got {relax!r}")
     if not (math.isfinite(t_release) and t_release >= 0.0):
         raise InputError(f"t_release must be a non-negative time in s, got {t_release!r}")
     _check_hdx(hdx)
@@ -600,7 +627,14 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                    hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
                    output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall,
                    damping_radial=sponge > 0.0,
-                   mirror=planes if symmetry == "mirror" else ())
+                   mirror=planes if symmetry == "mirror" else (), boundary=boundary)
+    rest = centre.copy()
+    rest[v] = depth  # the stepper places the body at its equilibrium position + body[B_Z]
+    case.body_surface = (tuple(float(c) for c in rest), float(radius))
+    if relax > 0.0:
+        case.relax_urms = relax * math.sqrt(g * depth)
+        case.relax_sigma = math.pi * c0 / (4.0 * depth)
+        case.relax_tmin = 4.0 * depth / c0
     if t_release > 0.0:
         # release on an output sample; PEC evaluates forces at mid-step, so the body is free
         # from the evaluation half a step before it and the first sample has m zddot = F_tot
@@ -615,18 +649,20 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
             half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
-            smooth_body: bool = True, sponge: float = 0.0) -> SPHCase:
+            smooth_body: bool = True, sponge: float = 0.0, boundary: str = "shepard",
+            relax: float = 0.0) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
     case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
                       half_width, tf, G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall,
                       hdx=hdx, t_release=t_release, smooth_body=smooth_body,
-                      sponge=sponge)
+                      sponge=sponge, boundary=boundary, relax=relax)
     case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
                        "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
                        "sponge": sponge}
+    _record_boundary(case, boundary, relax)
     return case
 
 
@@ -635,7 +671,8 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
-            symmetry: str = "mirror") -> SPHCase:
+            symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0
+            ) -> SPHCase:
     """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D); walls at
     ``half_width`` [m] from the sphere's axis. ``domain`` ``"quarter"`` (default; symmetry
     planes x = 0 and y = 0), ``"half"`` (y = 0) or ``"full"``; ``symmetry`` ``"mirror"``
@@ -646,13 +683,14 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
                       alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release,
                       smooth_body=smooth_body, sponge=sponge, domain=domain,
-                      symmetry=symmetry)
+                      symmetry=symmetry, boundary=boundary, relax=relax)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
                        "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
                        "smooth_body": smooth_body, "sponge": sponge, "domain": domain,
                        "symmetry": symmetry}
+    _record_boundary(case, boundary, relax)
     return case
 
 
@@ -660,7 +698,7 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
               smooth_body: bool = True, gain: float = 1.0, domain: str = "half",
-              symmetry: str = "mirror") -> SPHCase:
+              symmetry: str = "mirror", boundary: str = "shepard") -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
     narrow flume (``domain`` ``"half"``: symmetry plane y = 0, or ``"full"``) with a piston
     and a damping zone. ``symmetry``: ``"mirror"`` (true mirror plane) or ``"wall"`` (the
@@ -685,13 +723,23 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
                       probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body,
-                      domain=domain, symmetry=symmetry)
+                      domain=domain, symmetry=symmetry, boundary=boundary)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body, "gain": gain, "domain": domain,
                        "symmetry": symmetry}
+    _record_boundary(case, boundary)
     return case
+
+
+def _record_boundary(case: SPHCase, boundary: str, relax: float = 0.0) -> None:
+    """Record a non-default body boundary and relaxation in the case inputs (the defaults are
+    left out, so the inputs, checkpoints and histories of the shipped runs are unchanged)."""
+    if boundary != "shepard":
+        case.inputs["boundary"] = boundary
+    if relax > 0.0:
+        case.inputs["relax"] = relax
 
 
 def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
@@ -708,6 +756,14 @@ def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
     if piston and domain == "quarter":
         raise InputError("a paddle case cannot be a quarter domain (the paddle is at x = 0)")
     return {"quarter": (0, 1), "half": (1,), "full": ()}[domain]
+
+
+BOUNDARIES = ("shepard", "mdbc")
+
+
+def _check_boundary(boundary: str) -> None:
+    if boundary not in BOUNDARIES:
+        raise InputError(f"boundary must be one of {', '.join(BOUNDARIES)}, got {boundary!r}")
 
 
 def _check_gain(gain: float) -> None:
