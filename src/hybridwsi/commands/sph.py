@@ -45,6 +45,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--lattice-body", action="store_true",
                         help="body cases: build the body from lattice points (staircase "
                              "surface) instead of smooth concentric shells, for comparison")
+    parser.add_argument("--boundary", choices=("shepard", "mdbc"), default=None,
+                        help="body cases: body-particle pressure by Shepard extrapolation "
+                             "(default) or the first-order mDBC ghost node (docs/SPH_RUNS.md)")
+    parser.add_argument("--relax", type=o.nonnegative_float, default=None, metavar="R",
+                        help="decay cases: damp the fluid while the body is held and release "
+                             "once the rms fluid speed is below R·sqrt(g·depth)")
     o.add_out(parser, "output TimeHistory NetCDF (default sph_<case>.nc)", metavar="HIST.nc")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")
@@ -68,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
     case = tank.build(args.case, dp=args.dp, tf=args.tf, depth=args.depth, hdx=args.hdx,
                       t_release=args.hold, sponge=args.sponge, gain=args.gain,
                       domain=args.domain, symmetry=args.symmetry,
-                      smooth_body=(False if args.lattice_body else None))
+                      smooth_body=(False if args.lattice_body else None),
+                      boundary=args.boundary, relax=args.relax)
     if not args.quiet:
         print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} "
               f"s, tf = {case.tf} s -> {out}")
