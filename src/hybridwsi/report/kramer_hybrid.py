@@ -281,6 +281,20 @@ class StructuredResidual:
                 "n_samples": self.n_samples}
 
 
+def rk4_step(rhs: Any, z: Any, v: Any, x: Any, h: float) -> tuple[Any, Any, Any]:
+    """One classical Runge–Kutta step of ``(ż, v̇, ẋ) = rhs(z, v, x)`` of length ``h`` [s].
+
+    Arithmetic only, so the same step serves NumPy arrays (:func:`integrate_decay`) and torch
+    tensors (:func:`torch_decays`, differentiable).
+    """
+    d1 = rhs(z, v, x)
+    d2 = rhs(z + 0.5 * h * d1[0], v + 0.5 * h * d1[1], x + 0.5 * h * d1[2])
+    d3 = rhs(z + 0.5 * h * d2[0], v + 0.5 * h * d2[1], x + 0.5 * h * d2[2])
+    d4 = rhs(z + h * d3[0], v + h * d3[1], x + h * d3[2])
+    return tuple(y + h / 6.0 * (a + 2 * b + 2 * c + d)
+                 for y, a, b, c, d in zip((z, v, x), d1, d2, d3, d4))
+
+
 def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
                     coef: np.ndarray | None = None, duration: float | None = None,
                     dt: float | None = None, added_mass: Any | None = None
@@ -343,13 +357,7 @@ def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
     zs[:, 0] = z
     alive = np.ones(n_run, bool)
     for k in range(n):
-        d1 = rhs(z, v, x)
-        d2 = rhs(z + 0.5 * dt * d1[0], v + 0.5 * dt * d1[1], x + 0.5 * dt * d1[2])
-        d3 = rhs(z + 0.5 * dt * d2[0], v + 0.5 * dt * d2[1], x + 0.5 * dt * d2[2])
-        d4 = rhs(z + dt * d3[0], v + dt * d3[1], x + dt * d3[2])
-        z = z + dt / 6.0 * (d1[0] + 2 * d2[0] + 2 * d3[0] + d4[0])
-        v = v + dt / 6.0 * (d1[1] + 2 * d2[1] + 2 * d3[1] + d4[1])
-        x = x + dt / 6.0 * (d1[2] + 2 * d2[2] + 2 * d3[2] + d4[2])
+        z, v, x = rk4_step(rhs, z, v, x, dt)
         alive &= np.isfinite(z) & (np.abs(z) <= r)  # left the water / diverged
         zs[alive, k + 1] = z[alive]
         if not alive.any():
@@ -527,13 +535,7 @@ def torch_decays(net: Any, setup: KramerSetup, h0: np.ndarray, dt: float, n_step
     x = torch.zeros(z.shape[0], ar.shape[0], dtype=z.dtype)
     out = [z]
     for h in ([first] if first > 1e-12 else []) + [dt] * n_steps:
-        d1 = rhs(z, v, x)
-        d2 = rhs(z + 0.5 * h * d1[0], v + 0.5 * h * d1[1], x + 0.5 * h * d1[2])
-        d3 = rhs(z + 0.5 * h * d2[0], v + 0.5 * h * d2[1], x + 0.5 * h * d2[2])
-        d4 = rhs(z + h * d3[0], v + h * d3[1], x + h * d3[2])
-        z = z + h / 6.0 * (d1[0] + 2 * d2[0] + 2 * d3[0] + d4[0])
-        v = v + h / 6.0 * (d1[1] + 2 * d2[1] + 2 * d3[1] + d4[1])
-        x = x + h / 6.0 * (d1[2] + 2 * d2[2] + 2 * d3[2] + d4[2])
+        z, v, x = rk4_step(rhs, z, v, x, h)
         out.append(z)
     return torch.stack(out, dim=1)
 
