@@ -10,13 +10,17 @@ diagnostic (:func:`hybridwsi.diagnostic.regress`) says which part of it is dampi
 or mass-like and how it changes with amplitude, and two residual models are fitted on two drops
 and rolled out on the third (leave one drop out, all three choices):
 
-- a *structured* model, linear in its coefficients and fitted by least squares,
+- a *structured* model, linear in its coefficients and fitted by least squares on the
+  training drops' heave (:func:`fit_output_error`),
   ``F_res = −a(z) z̈ − b₁ ż − b₂ |ż| ż − k₁ z − k₃ z³`` with a position-dependent added-mass
   change ``a(z) = a₁ z + a₂ z²`` (the added mass of a sphere that is lifted out of the water
   falls towards zero), linear plus quadratic drag and an amplitude-dependent stiffness;
-- a small network (:class:`hybridwsi.surrogate.ForceNetwork`) of the lag-0 kinematics, rolled
-  out with :func:`hybridwsi.surrogate.rollout.rollout` after :func:`check_stability` predicted
-  its stability.
+- a small network (:class:`hybridwsi.surrogate.ForceNetwork`) of the lag-0 kinematics, fitted
+  on ``F_bb`` (one step) and then trained on the training drops' heave through a
+  differentiable rollout (multi-step, :func:`train_network_on_heave`; its length chosen by
+  nested leave-one-out, ``scripts/kramer_select.py``), rolled out with
+  :func:`hybridwsi.surrogate.rollout.rollout` after :func:`check_stability` predicted its
+  stability.
 
 Scores are those of the decay table (:func:`hybridwsi.report.validation.rms_heave_error`, RMS
 of heave/H0 over [0, 5 Te0] on the experiment's grid), next to the published codes.
