@@ -10,7 +10,8 @@ validation is the mean over the two ordered pairs (A → B, B → A) with A, B �
 is never looked at for H.
 
 Run: ``PYTHONPATH=src OMP_NUM_THREADS=1 python scripts/kramer_select.py [--iterations 80]``
-(about 5 min on one loaded core). Prints the inner validation table and the selected count.
+(about 7 min wall on the loaded machine). Prints the inner validation table and the selected
+count.
 """
 
 from __future__ import annotations
