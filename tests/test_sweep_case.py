@@ -16,7 +16,8 @@ pytest.importorskip("zarr")
 pytest.importorskip("moorpy")
 
 from hybridwsi import cummins, sweep
-from hybridwsi.cases import case_coefficients, load_case
+from hybridwsi.cases import load_case
+from hybridwsi.hydro.bem import case_coefficients
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
 from hybridwsi.forces import MooringForce, MooringSystem, MorisonDrag, additional_damping

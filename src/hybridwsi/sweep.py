@@ -235,8 +235,9 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
 
 def sweep_coefficients(manifest: dict) -> xr.Dataset:
     """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
-    was given, else its case's (:func:`case_coefficients`), else the paper sphere's."""
-    from hybridwsi.cases import case_coefficients, load_case
+    was given, else its case's (:func:`~hybridwsi.hydro.bem.case_coefficients`), else the paper sphere's."""
+    from hybridwsi.cases import load_case
+    from hybridwsi.hydro.bem import case_coefficients
 
     cfg = manifest.get("config", {})
     if cfg.get("coeffs"):
@@ -284,7 +285,8 @@ def case_setup(config: SweepConfig) -> dict:
     Returns ``{"_case": the case dict, "_dofs", "_coeffs", "_radiation_ss",
     "_mooring_table"}`` (the table None when the case has no mooring).
     """
-    from hybridwsi.cases import case_coefficients, load_case
+    from hybridwsi.cases import load_case
+    from hybridwsi.hydro.bem import case_coefficients
     from hybridwsi.forces import MooringForce
     from hybridwsi.hydro import coefficients as cf
 

@@ -183,15 +183,3 @@ def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]
         args["dofs"] = tuple(args["dofs"])
     return {"body": body_from_case(case), "omega": frequencies(cfg), **args}
 
-
-def case_coefficients(case: Mapping[str, Any], cache_dir: Any = None) -> Any:
-    """A case's coefficient Dataset: :func:`hybridwsi.hydro.bem.compute` on its ``[bem]``
-    table, which returns the shipped file without solving when the inputs match (OC3-Hywind:
-    ``bem_oc3_hywind.nc``); ``cache_dir`` as in ``compute``."""
-    import warnings
-
-    from hybridwsi.hydro import bem
-
-    with warnings.catch_warnings():  # Capytaine's chatter on loading
-        warnings.simplefilter("ignore")
-        return bem.compute(**bem_arguments(case), cache_dir=cache_dir, progress=False)

@@ -33,7 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from hybridwsi.cases import case_coefficients, load_case
+from hybridwsi.cases import load_case
 from hybridwsi.cummins import simulate
 from hybridwsi.dofs import RIGID_DOFS, index, motion_unit
 from hybridwsi.files import atomic_write
@@ -45,6 +45,7 @@ from hybridwsi.forces import (
     additional_damping,
 )
 from hybridwsi.history import mean_crossing_period
+from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
 from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
@@ -63,9 +64,9 @@ RAO_HEIGHT = 1.0  # m: linear system, the height only scales the response
 
 def oc3_coefficients(case: dict[str, Any] | None = None, cache_dir: Path | None = None
                      ) -> xr.Dataset:
-    """The OC3-Hywind coefficients (:func:`hybridwsi.cases.case_coefficients`: the shipped
+    """The OC3-Hywind coefficients (:func:`hybridwsi.hydro.bem.case_coefficients`: the shipped
     file when the inputs match)."""
-    return case_coefficients(load_case("oc3_hywind") if case is None else case, cache_dir)
+    return bem.case_coefficients(load_case("oc3_hywind") if case is None else case, cache_dir)
 
 
 def mooring_summary(case: dict[str, Any], system: MooringSystem | None = None
