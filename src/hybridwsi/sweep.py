@@ -235,7 +235,8 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
 
 def sweep_coefficients(manifest: dict) -> xr.Dataset:
     """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
-    was given, else its case's (:func:`~hybridwsi.hydro.bem.case_coefficients`), else the paper sphere's."""
+    was given, else its case's (:func:`~hybridwsi.hydro.bem.case_coefficients`), else the
+    paper sphere's."""
     from hybridwsi.cases import load_case
     from hybridwsi.hydro.bem import case_coefficients
 
