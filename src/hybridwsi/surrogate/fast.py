@@ -376,6 +376,13 @@ def _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss
         x1[s] = acc
 
 
+@_inline
+def _trajectories(nc, n_steps, nd, ns):
+    """Output arrays z, ż, z̈ (nc, n_steps + 1, nd) and x (nc, n_steps + 1, ns)."""
+    shape = (nc, n_steps + 1, nd)
+    return np.empty(shape), np.empty(shape), np.empty(shape), np.empty((nc, n_steps + 1, ns))
+
+
 @_jit
 def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, chan_pos,
             eta_pos, window, stride, corrections, w_all, b_all, sizes, kind, z0, v0, a0, x0,
@@ -383,10 +390,7 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
     nc, nd = z0.shape
     ns = x0.shape[1]
     span, nch = ring.shape[1], ring.shape[2]
-    zs = np.empty((nc, n_steps + 1, nd))
-    vs = np.empty((nc, n_steps + 1, nd))
-    as_ = np.empty((nc, n_steps + 1, nd))
-    xs = np.empty((nc, n_steps + 1, ns))
+    zs, vs, as_, xs = _trajectories(nc, n_steps, nd, ns)
     zs[:, 0], vs[:, 0], as_[:, 0], xs[:, 0] = z0, v0, a0, x0
     width = w_all.shape[1]
     wt_all = np.empty_like(w_all)  # [layer, out, in] for the dot-product layers
@@ -537,6 +541,19 @@ def _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f):
 
 
 @_inline
+def _matvec_b(m, x, out):
+    """out = m @ x for all cases, ``x`` and ``out`` (n, nc)."""
+    nc = out.shape[1]
+    for i in range(m.shape[0]):
+        for c in range(nc):
+            out[i, c] = 0.0
+        for j in range(m.shape[1]):
+            mij = m[i, j]
+            for c in range(nc):
+                out[i, c] += mij * x[j, c]
+
+
+@_inline
 def _integrate_b(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
                  z1, v1, a1, x1, r):
     """:func:`_integrate` for all cases, arrays (n, nc)."""
@@ -558,13 +575,7 @@ def _integrate_b(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_
             bde, cde = damping[d, e], stiffness[d, e]
             for c in range(nc):
                 r[d, c] -= bde * v1[e, c] + cde * z1[e, c]
-    for d in range(nd):
-        for c in range(nc):
-            a1[d, c] = 0.0
-        for e in range(nd):
-            lde = lhs_inv[d, e]
-            for c in range(nc):
-                a1[d, c] += lde * r[e, c]
+    _matvec_b(lhs_inv, r, a1)
     for d in range(nd):
         for c in range(nc):
             if scheme == 0:
@@ -573,13 +584,8 @@ def _integrate_b(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_
             else:
                 v1[d, c] = v[d, c] + dt * a1[d, c]
                 z1[d, c] = z[d, c] + dt * v1[d, c]
+    _matvec_b(p_ss, x, x1)
     for s in range(ns):
-        for c in range(nc):
-            x1[s, c] = 0.0
-        for t in range(ns):
-            pst = p_ss[s, t]
-            for c in range(nc):
-                x1[s, c] += pst * x[t, c]
         for d in range(nd):
             qsd = q_ss[s, d]
             for c in range(nc):
@@ -615,10 +621,7 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
     nd, nc = z0.shape
     ns = x0.shape[0]
     span, nch = ring.shape[0], ring.shape[1]
-    zs = np.empty((nc, n_steps + 1, nd))
-    vs = np.empty((nc, n_steps + 1, nd))
-    as_ = np.empty((nc, n_steps + 1, nd))
-    xs = np.empty((nc, n_steps + 1, ns))
+    zs, vs, as_, xs = _trajectories(nc, n_steps, nd, ns)
     zs[:, 0], vs[:, 0], as_[:, 0], xs[:, 0] = z0.T, v0.T, a0.T, x0.T
     feat = np.empty((window * nch, nc))
     row = np.zeros((nch, nc))
