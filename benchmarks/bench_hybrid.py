@@ -19,8 +19,9 @@ metadata, Numba dispatch) cancels on both sides alike.
   excitation *synthesised inside the run* (a harmonic sum per sample, ~80 % of that
   "step"), which the hybrid never pays (its cases hold F_exc): unfair to the Cummins side.
 
-Run: ``python benchmarks/bench_hybrid.py`` (a few minutes; the first run also compiles the
-Numba loops, ~1 min, cached afterwards).
+Run: ``python benchmarks/bench_hybrid.py`` (about a minute on an idle machine; the first run
+also compiles the Numba loops, ~1 min, cached afterwards). On a loaded machine the marginal
+times scatter by ~20 % between runs (best of 7 each): compare ratios within one run.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ N_CASES = 32
 
 def best_of(fn: Callable[[], object], n: int = 3) -> float:
     """Shortest CPU time [s] of ``n`` calls (every part is single-threaded; CPU time is what
-    a shared machine does not inflate, and equals the wall time on an idle one)."""
+    a shared machine inflates least, and equals the wall time on an idle one)."""
     times = []
     for _ in range(n):
         t0 = time.process_time()
@@ -63,7 +64,7 @@ def best_of(fn: Callable[[], object], n: int = 3) -> float:
 
 
 def marginal(run: Callable[[int], object], n_cases: int, n_long: int = N_LONG,
-             n_short: int = N_SHORT, repeat: int = 3) -> float:
+             n_short: int = N_SHORT, repeat: int = 7) -> float:
     """CPU time [s] per case-step of ``run(n_steps)``: difference of a long and a short run."""
     long_, short = best_of(lambda: run(n_long), repeat), best_of(lambda: run(n_short), repeat)
     return (long_ - short) / (n_long - n_short) / n_cases
@@ -130,13 +131,12 @@ def main() -> None:
         return cummins.simulate(co, mass=sh.M, duration=n * DT, dt=DT, wave=wave,
                                 radiation_ss=ss)
 
-    base1, base32 = marginal(cum1, 1, repeat=5), marginal(cum32, N_CASES)
-    base_wave = marginal(cum_wave, 1, repeat=5)
+    base1, base32 = marginal(cum1, 1), marginal(cum32, N_CASES)
+    base_wave = marginal(cum_wave, 1)
     u = {n: np.stack([h["F_exc"].values[:n + 1] for h in cases], axis=-1)
          for n in (N_LONG, N_SHORT)}  # (nt, 1, n_case)
     zero = np.zeros((1, N_CASES))
-    core_cum = marginal(lambda n: solvers.run_linear(sysm, u[n], zero, zero, DT), N_CASES,
-                        repeat=5)
+    core_cum = marginal(lambda n: solvers.run_linear(sysm, u[n], zero, zero, DT), N_CASES)
 
     # --- hybrid
     def hyb(batch, mode="lagged", compiled=None):
@@ -151,14 +151,14 @@ def main() -> None:
                 ro.rollout(net, cut[1000][:batch], mass=sh.M, known=part["known"], mode=mode,
                            check=False, n_steps=50)
         for mode in ("lagged", "corrected"):
-            rows.append((f"hybrid {mode:9s} compiled, 1 case  ", marginal(hyb(1, mode), 1, repeat=5),
+            rows.append((f"hybrid {mode:9s} compiled, 1 case  ", marginal(hyb(1, mode), 1),
                          base1))
             rows.append((f"hybrid {mode:9s} compiled, 32 cases", marginal(hyb(N_CASES, mode), N_CASES),
                          base32))
         kt = {}
         for n in (N_LONG, N_SHORT):
             with KernelTimer() as timer:
-                best = min(_kernel_time(timer, hyb(N_CASES), n) for _ in range(3))
+                best = min(_kernel_time(timer, hyb(N_CASES), n) for _ in range(7))
             kt[n] = best
         core_hyb = (kt[N_LONG] - kt[N_SHORT]) / (N_LONG - N_SHORT) / N_CASES
     for mode in ("lagged", "corrected"):  # the NumPy stepper is slower: fewer steps
