@@ -677,11 +677,9 @@ def rollout(
     t = np.asarray(hs[0]["time"].values, float)
     nc = len(hs)
     zs, vs, as_ = (np.empty((nc, n_steps + 1, nd)) for _ in range(3))
-    fnet, fknown = np.full((nc, n_steps + 1, nd), np.nan), np.full((nc, n_steps + 1, nd), np.nan)
+    fnet, fknown = np.empty((nc, n_steps + 1, nd)), np.empty((nc, n_steps + 1, nd))
     zs[:, 0], vs[:, 0], as_[:, 0] = s.z, s.v, s.a
     a_k = phys.m_eff - as_matrix(mass, nd, "mass")
-    f_phys = phys.force(t[k0], s.z, s.v, s.x)
-    fknown[:, 0], fnet[:, 0] = f_phys - s.a @ a_k.T, s.a @ phys.m_eff.T - f_phys - pre[:, k0]
     ref_amp = np.maximum(np.max(np.abs(kin["z"]), axis=(1, 2)), 1e-12)
     xs = np.empty((nc, n_steps + 1, phys.n_states))
     xs[:, 0] = s.x
@@ -696,34 +694,40 @@ def rollout(
         blew, n_done = _step_loop(stepper, s, t, pre, eta, k0, lead, n_steps, ref_amp,
                                   (zs, vs, as_, xs), progress)
         iterations = np.asarray(stepper.iterations)
-    # forces on the trajectory, after the loop
+    # forces on the trajectory (the start sample included), after the loop
     if not phys.other:  # no explicit t dependence: all cases and steps in one evaluation
-        rows = nc * n_steps
-        f_phys = phys.force(t[k0], zs[:, 1:].reshape(rows, nd), vs[:, 1:].reshape(rows, nd),
-                            xs[:, 1:].reshape(rows, phys.n_states)).reshape(nc, n_steps, nd)
-        fknown[:, 1:] = f_phys - as_[:, 1:] @ a_k.T
+        rows, shape = nc * (n_steps + 1), (nc, n_steps + 1, nd)
+        acc = as_.reshape(rows, nd)  # views: the trajectories are contiguous
+        f_phys = phys.force(t[k0], zs.reshape(rows, nd), vs.reshape(rows, nd),
+                            xs.reshape(rows, phys.n_states)).reshape(shape)
+        fknown[:] = f_phys - (acc @ a_k.T).reshape(shape)
         # the network force actually applied (lagged: the one evaluated on the step before)
-        fnet[:, 1:] = as_[:, 1:] @ phys.m_eff.T - f_phys - pre[:, k0 + 1:k0 + n_steps + 1]
-    for n in range(1, n_steps + 1) if phys.other else ():  # one evaluation per time step
+        fnet[:] = (acc @ phys.m_eff.T).reshape(shape) - f_phys - pre[:, k0:k0 + n_steps + 1]
+    for n in range(n_steps + 1) if phys.other else ():  # one evaluation per time step
         k1 = k0 + n
         f_phys = phys.force(t[k1], zs[:, n], vs[:, n], xs[:, n])
         fknown[:, n] = f_phys - as_[:, n] @ a_k.T
         fnet[:, n] = as_[:, n] @ phys.m_eff.T - f_phys - pre[:, k1]
     a_ref = kin["zddot"][:, k0:k0 + n_steps + 1]
+    d2 = np.diff(as_, 2, axis=1)
     with np.errstate(invalid="ignore", over="ignore"):
-        saw = np.sqrt(np.nanmean(np.diff(as_, 2, axis=1) ** 2, axis=(1, 2))) / np.maximum(
-            np.sqrt(np.mean(a_ref ** 2, axis=(1, 2))), 1e-300)
+        if d2.size and np.isfinite(d2).all():  # the usual case: one pass, no NaN masks
+            ms = np.einsum("ijk,ijk->i", d2, d2) / (d2.shape[1] * d2.shape[2])
+        else:
+            ms = np.nanmean(d2 ** 2, axis=(1, 2))
+        saw = np.sqrt(ms) / np.maximum(np.sqrt(np.mean(a_ref ** 2, axis=(1, 2))), 1e-300)
     saw = np.where(np.isfinite(saw), saw, np.inf)
     blew |= saw > SAWTOOTH_RATIO
     out = []
     tt = t[k0:k0 + n_steps + 1]
+    # the same for every case: described once (describe() formats matrices, ~0.1 ms each)
+    described, spec_dict = [c.describe() for c in known], net.spec_.to_dict()
     for i in range(nc):
         forces = {"F_known": fknown[i], "F_net": fnet[i]}
         out.append(make_history(tt, zs[i], vs[i], as_[i], forces=forces, dof=list(hs[i]["dof"].values),
                                 mass=mass, source=f"hybridwsi.surrogate.rollout ({mode})",
                                 inputs={"mode": mode, "dt": dt, "n_steps": n_done,
-                                        "known": [c.describe() for c in known],
-                                        "network": net.spec_.to_dict()},
+                                        "known": list(described), "network": dict(spec_dict)},
                                 check=False))
     return RolloutResult(out, blew, prediction, iterations, saw)
 
