@@ -445,15 +445,12 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
                 xs[c, n + 1, s] = x1[s]
             if n % 50 == 49 or n == n_steps - 1:  # divergence watch (as the NumPy loop)
                 zmax = 0.0
-                bad = False
                 for k in range(n - min(n, 49), n + 2):
                     for d in range(nd):
                         val = abs(zs[c, k, d])
-                        if not math.isfinite(val):
-                            bad = True
-                        elif val > zmax:
-                            zmax = val
-                if bad or zmax > blowup * ref_amp[c]:
+                        # branch-free: NaN fails every comparison, made explicit as inf
+                        zmax = val if val > zmax else (zmax if val == val else np.inf)
+                if not (zmax <= blowup * ref_amp[c]):
                     blew[c] = True
                     n_case = n + 1  # diverged: stop this case, NaN after
                     zs[c, n + 2:], vs[c, n + 2:], as_[c, n + 2:] = np.nan, np.nan, np.nan
