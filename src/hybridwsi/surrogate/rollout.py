@@ -153,7 +153,7 @@ class BatchedPhysics:
         if self._quad:  # an all-zero coefficient adds exactly nothing
             f = f - self.quad * np.abs(v) * v
         for sl, _, _, c in self.ss:
-            f -= x[:, sl] @ c.T
+            f -= np.dot(x[:, sl], c.T)
         for sl, comp in self.other:
             f += np.stack([comp.ode_force(t, z[i], v[i], x[i, sl]) for i in range(len(z))])
         return f
@@ -164,7 +164,10 @@ class BatchedPhysics:
         Row-wise: with no ``other`` components (``t`` unused) the rows may stack any batch of
         states, e.g. all time steps of a trajectory at once.
         """
-        return self._add_remainder(-v @ self.b_lin.T - z @ self.c_lin.T, t, z, v, x)
+        # np.dot, not @: on tall (rows, n_dof) operands ``@`` runs a non-BLAS loop, ~15x
+        # slower for one dof (the whole trajectory goes through here after a rollout)
+        return self._add_remainder(-np.dot(v, self.b_lin.T) - np.dot(z, self.c_lin.T), t, z, v,
+                                   x)
 
     def explicit_force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
         """The known force minus its linear ``-B_k v - C_k z`` part [N] (treated explicitly),
@@ -700,9 +703,9 @@ def rollout(
         acc = as_.reshape(rows, nd)  # views: the trajectories are contiguous
         f_phys = phys.force(t[k0], zs.reshape(rows, nd), vs.reshape(rows, nd),
                             xs.reshape(rows, phys.n_states)).reshape(shape)
-        fknown[:] = f_phys - (acc @ a_k.T).reshape(shape)
+        fknown[:] = f_phys - np.dot(acc, a_k.T).reshape(shape)  # np.dot: see force()
         # the network force actually applied (lagged: the one evaluated on the step before)
-        fnet[:] = (acc @ phys.m_eff.T).reshape(shape) - f_phys - pre[:, k0:k0 + n_steps + 1]
+        fnet[:] = np.dot(acc, phys.m_eff.T).reshape(shape) - f_phys - pre[:, k0:k0 + n_steps + 1]
     for n in range(n_steps + 1) if phys.other else ():  # one evaluation per time step
         k1 = k0 + n
         f_phys = phys.force(t[k1], zs[:, n], vs[:, n], xs[:, n])
