@@ -236,13 +236,13 @@ def test_python_dash_m(module, tmp_path):
 def test_select_dofs_keeps_units_per_dof():
     import numpy as np
 
-    from hybridwsi.history import make_history, units_per_dof
+    from hybridwsi.history import make_history, select_dofs, units_per_dof
 
     t = np.arange(0, 1, 0.1)
     z = np.zeros((t.size, 2))
     h = make_history(t, z, z, z, {"F_tot": z}, dof=["Surge", "Pitch"], mass=np.eye(2))
-    p = o.select_dofs(h, ("Pitch",))
+    p = select_dofs(h, ("Pitch",))
     assert list(p["dof"].values) == ["Pitch"] and units_per_dof(p, "z") == ["rad"]
     assert units_per_dof(p, "F_tot") == ["N m"] and p["mass"].shape == (1, 1)
     with pytest.raises(InputError, match="no DOF Heave"):
-        o.select_dofs(h, ("Heave",))
+        select_dofs(h, ("Heave",))

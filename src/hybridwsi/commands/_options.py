@@ -8,7 +8,7 @@ value is one ``error:`` line before any work starts.
 
 Also here: :func:`require` (an optional dependency → one line naming the extra to install),
 :func:`check_allocation` (refuse a run whose arrays cannot fit in memory before allocating) and
-:func:`select_dofs` (keep some DOFs of a history).
+:func:`read_dofs` (read a history and keep its DOFs ``--dofs``, with ``history.select_dofs``).
 """
 
 from __future__ import annotations
@@ -260,36 +260,6 @@ def check_steps(duration: float, dt: float, n_dof: int) -> int:
 # ------------------------------------------------------------------------- histories
 
 
-def select_dofs(hist: Any, dofs: Sequence[str] | None, what: str = "the history") -> Any:
-    """Keep the DOFs ``dofs`` (in that order) of a TimeHistory; None keeps all.
-
-    Per-DOF unit attributes are rewritten for the kept DOFs; (dof, dof_j) matrices are
-    restricted to the kept rows and columns.
-    """
-    import json
-
-    if dofs is None:
-        return hist
-    have = [str(d) for d in hist["dof"].values]
-    missing = [d for d in dofs if d not in have]
-    if missing:
-        raise InputError(f"{what} has no DOF {', '.join(missing)} (it has {', '.join(have)}); "
-                         "choose --dofs among those")
-    keep = [have.index(d) for d in dofs]
-    out = hist.isel(dof=keep)
-    if "dof_j" in out.dims:
-        out = out.isel(dof_j=keep)
-    for name in list(out.data_vars):
-        attrs = out[name].attrs
-        if "units_per_dof" in attrs and out[name].dims[-1:] == ("dof",):
-            per = json.loads(attrs["units_per_dof"])
-            if len(per) == len(have):
-                per = [per[i] for i in keep]
-                out[name] = out[name].assign_attrs(units_per_dof=json.dumps(per),
-                                                   units=", ".join(dict.fromkeys(per)))
-    return out
-
-
 def read_dofs(path: str, dofs: Sequence[str] | None, *, format: str = "auto",
               **options: Any) -> Any:
     """:func:`hybridwsi.importers.read_history` with ``--dofs``.
@@ -297,6 +267,7 @@ def read_dofs(path: str, dofs: Sequence[str] | None, *, format: str = "auto",
     For a plain CSV, ``dofs`` names the DOFs of its columns (the reader's ``dof``); for the
     formats that name their DOFs (NetCDF, DualSPHysics, Kramer) it selects a subset of them.
     """
+    from hybridwsi.history import select_dofs
     from hybridwsi.importers import detect_format, read_history
 
     if dofs is None:

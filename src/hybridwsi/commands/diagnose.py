@@ -118,7 +118,8 @@ def example_history() -> xr.Dataset:
 
 def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[str, Any]]:
     """The history to diagnose and a description of where it came from."""
-    from hybridwsi.commands._options import read_dofs, select_dofs
+    from hybridwsi.commands._options import read_dofs
+    from hybridwsi.history import select_dofs
 
     if args.example:
         if args.file:

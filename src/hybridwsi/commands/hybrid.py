@@ -85,7 +85,8 @@ def _open_sweep(path: Path):
 
 
 def _load(data: list[str], dofs: tuple[str, ...] | None):
-    from hybridwsi.commands._options import read_dofs, select_dofs
+    from hybridwsi.commands._options import read_dofs
+    from hybridwsi.history import select_dofs
     from hybridwsi.sweep import STORE, case_history
 
     hists, manifest = [], None

@@ -368,6 +368,36 @@ def check_regressors(motion: Mapping[str, np.ndarray],
         raise InputError("the motion is constant: nothing to regress (z, zdot, zddot never change)")
 
 
+def select_dofs(hist: xr.Dataset, dofs: Sequence[str] | None,
+                what: str = "the history") -> xr.Dataset:
+    """Keep the DOFs ``dofs`` (in that order) of a TimeHistory; None keeps all.
+
+    Per-DOF unit attributes are rewritten for the kept DOFs; (dof, dof_j) matrices are
+    restricted to the kept rows and columns. A DOF the history lacks is an InputError naming
+    ``what``.
+    """
+    if dofs is None:
+        return hist
+    have = [str(d) for d in hist["dof"].values]
+    missing = [d for d in dofs if d not in have]
+    if missing:
+        raise InputError(f"{what} has no DOF {', '.join(missing)} (it has {', '.join(have)}); "
+                         "choose --dofs among those")
+    keep = [have.index(d) for d in dofs]
+    out = hist.isel(dof=keep)
+    if "dof_j" in out.dims:
+        out = out.isel(dof_j=keep)
+    for name in list(out.data_vars):
+        attrs = out[name].attrs
+        if "units_per_dof" in attrs and out[name].dims[-1:] == ("dof",):
+            per = json.loads(attrs["units_per_dof"])
+            if len(per) == len(have):
+                per = [per[i] for i in keep]
+                out[name] = out[name].assign_attrs(units_per_dof=json.dumps(per),
+                                                   units=", ".join(dict.fromkeys(per)))
+    return out
+
+
 def _steps_uniform(steps: np.ndarray) -> bool:
     """Whether time steps [s] vary by at most ``UNIFORM_RTOL`` of their median."""
     return bool(steps.size and (steps.max() - steps.min()) <= UNIFORM_RTOL * np.median(steps))
