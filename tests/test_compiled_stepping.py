@@ -20,7 +20,7 @@ import hybridwsi.cummins.compiled as compiled  # noqa: E402
 import hybridwsi.forces._compiled as kernels  # noqa: E402
 from hybridwsi.cases import load_case  # noqa: E402
 from hybridwsi.cummins import build_system, simulate, solvers  # noqa: E402
-from hybridwsi.errors import SolverError  # noqa: E402
+from hybridwsi.errors import InputError, SolverError  # noqa: E402
 from hybridwsi.forces import KnownComponent, LinearDamping, MooringForce, MorisonDrag  # noqa: E402
 from hybridwsi.forces.mooring import MooringTable  # noqa: E402
 from hybridwsi.report.fowt import linear_forces, oc3_coefficients  # noqa: E402
@@ -206,3 +206,58 @@ def test_without_numba_everything_falls_back(case, coeffs, monkeypatch, spy):
     hist = simulate(coeffs, dofs=DOFS3, duration=2.0, dt=0.1, forces=[mooring],
                     z0=[0.01, 0.5, 0.1])
     assert spy == [] and np.isfinite(hist["z"].values).all()
+
+
+# ------------------------------------------------- quadratic damping and rotor thrust kernels
+def _rotor(dofs):
+    """NREL 5-MW-like operating point: 800 kN thrust at the hub 90 m up (a little off the
+    x-z plane, for a yaw moment), dT/dU 1.2e5 N s/m (the module docstring's order)."""
+    from hybridwsi.forces import RotorThrust
+
+    return RotorThrust(8.0e5, 1.2e5, (-5.0, 1.5, 90.0), dofs)
+
+
+def test_quadratic_and_rotor_kernels_match_ode_force():
+    """Single states, all six DOFs shuffled and three: the kernels are the NumPy methods."""
+    from hybridwsi.forces import QuadraticDamping
+
+    rng = np.random.default_rng(4)
+    for dofs in (DOFS3, ("Yaw", "Heave", "Roll", "Surge", "Pitch", "Sway")):
+        n = len(dofs)
+        quad = QuadraticDamping(rng.uniform(1e4, 1e6, n))
+        for comp in (quad, QuadraticDamping(2.5e5), _rotor(dofs)):
+            k = comp.compiled_force(n)
+            out = np.empty(n)
+            for _ in range(20):
+                v = rng.normal(size=n)
+                assert k.kernel(1.0, rng.normal(size=n), v, out, k.fdata, k.idata) == 0
+                ref = comp.ode_force(1.0, np.zeros(n), v, None)
+                assert np.abs(out - ref).max() <= RTOL * np.abs(ref).max()
+    with pytest.raises(InputError, match="set up for 3 DOFs"):
+        _rotor(DOFS3).compiled_force(2)
+
+
+def test_quadratic_damping_and_damped_rotor_run_compiled(case, coeffs, mooring_table,
+                                                         monkeypatch, spy):
+    """A sea state with mooring, Morison drag, a quadratic damping and an operating rotor with
+    aerodynamic damping: the compiled loop runs and matches the NumPy loop."""
+    from hybridwsi.forces import QuadraticDamping
+
+    wave = JONSWAP(hs=5.0, tp=10.0, gamma=3.3, seed=6, n_components=40)
+    forces = [MooringForce(mooring_table, DOFS3), MorisonDrag.from_case(case, DOFS3, wave=wave),
+              QuadraticDamping([2.0e9, 3.0e5, 1.0e5]), _rotor(DOFS3)]
+    assert not forces[3].time_only  # the damped rotor is state-dependent: it needs its kernel
+    kw = dict(dofs=DOFS3, duration=60.0, dt=0.1, wave=wave, ramp=15.0, z0=[0.01, 2.0, 0.3])
+    fast, slow = _both(monkeypatch, lambda: simulate(coeffs, forces=forces, **kw))
+    assert len(spy) == 1
+    _assert_same(fast, slow)
+    # the thrust moved the platform downwind: a real, nonzero response of every force
+    assert fast["z"].values[-200:, 1].mean() > 1.0
+
+
+def test_quadratic_and_rotor_without_numba_fall_back(monkeypatch):
+    from hybridwsi.forces import QuadraticDamping
+
+    monkeypatch.setattr(kernels, "HAVE_NUMBA", False)
+    assert QuadraticDamping(1.0).compiled_force(3) is None
+    assert _rotor(DOFS3).compiled_force(3) is None

@@ -10,10 +10,12 @@ import synthetic_hydro as sh
 from hybridwsi.errors import InputError
 from hybridwsi.waves import (
     JONSWAP,
+    AiryKinematics,
     PiersonMoskowitz,
     Regular,
     dispersion_k,
     excitation_force,
+    particle_velocity,
     wave_from_dict,
 )
 
@@ -136,3 +138,95 @@ def test_long_wave_excitation_is_hydrostatic_and_in_phase(bem_long_waves):
     t = np.linspace(0, wave.period, 400)
     f = excitation_force(wave, co, t)
     np.testing.assert_allclose(f, c33 * wave.elevation(t), atol=0.01 * c33)
+
+
+# ---------------------------------------------------------------------- particle kinematics
+def test_deep_water_particle_velocity_is_the_closed_form():
+    """u = a ω e^{kz} cos(ωt + φ − kx), w = −a ω e^{kz} sin(ωt + φ − kx) for η = a cos(ωt + φ)
+    at x = 0 (so w(z = 0) = ∂η/∂t), and the same with the wave turned by β along its ray."""
+    g, a, period, phase = 9.80665, 1.5, 8.0, 0.4
+    w_ = 2 * np.pi / period
+    k = w_**2 / g
+    t = np.linspace(0.0, 30.0, 61)
+    z = np.array([-60.0, -10.0, -1.0, 0.0])
+    x = 17.0
+    theta = w_ * t[:, None] + phase - k * x
+    u, w = particle_velocity(Regular(period, 2 * a, phase), t, x, z, g=g)
+    np.testing.assert_allclose(u, a * w_ * np.exp(k * z) * np.cos(theta), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(w, -a * w_ * np.exp(k * z) * np.sin(theta), rtol=1e-12, atol=1e-14)
+    # the kinematic free-surface condition of linear theory at x = 0
+    eta_dot = -a * w_ * np.sin(w_ * t + phase)
+    _, w0 = particle_velocity(Regular(period, 2 * a, phase), t, 0.0, 0.0, g=g)
+    np.testing.assert_allclose(w0, eta_dot, rtol=1e-12, atol=1e-14)
+    # oblique wave: the phase depends on the distance along the ray, x cos β + y sin β
+    beta = 0.7
+    u_b, w_b = particle_velocity(Regular(period, 2 * a, phase, direction=beta), t,
+                                 x * np.cos(beta), z, y=x * np.sin(beta), g=g)
+    np.testing.assert_allclose(u_b, u, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(w_b, w, rtol=1e-10, atol=1e-12)
+
+
+def test_finite_depth_particle_velocity_is_the_cosh_sinh_form():
+    """u = a ω cosh(k(z+h))/sinh(kh) cos θ, w = −a ω sinh(k(z+h))/sinh(kh) sin θ, k from
+    ω² = g k tanh(kh); w = 0 on the seabed, and a scalar time or point drops its axis."""
+    g, h, a, period, phase = 9.81, 12.0, 0.5, 9.0, -1.1
+    w_ = 2 * np.pi / period
+    k = dispersion_k(w_, h, g)
+    assert w_**2 == pytest.approx(g * k * np.tanh(k * h), rel=1e-12)
+    t = np.linspace(0.0, 20.0, 41)
+    z = np.linspace(-h, 0.0, 7)
+    x = -5.0
+    theta = w_ * t[:, None] + phase - k * x
+    wave = Regular(period, 2 * a, phase)
+    u, w = particle_velocity(wave, t, x, z, depth=h, g=g)
+    np.testing.assert_allclose(
+        u, a * w_ * np.cosh(k * (z + h)) / np.sinh(k * h) * np.cos(theta), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(
+        w, -a * w_ * np.sinh(k * (z + h)) / np.sinh(k * h) * np.sin(theta), rtol=1e-12, atol=1e-14)
+    assert np.abs(w[:, 0]).max() < 1e-14  # impermeable seabed
+    u1, w1 = particle_velocity(wave, t[5], x, z[3], depth=h, g=g)
+    assert np.shape(u1) == np.shape(w1) == ()
+    assert u1 == pytest.approx(u[5, 3], rel=1e-12) and w1 == pytest.approx(w[5, 3], rel=1e-12)
+
+
+@pytest.mark.parametrize("depth", [np.inf, 30.0])
+def test_particle_velocity_is_divergence_free(depth):
+    """Continuity ∂u/∂x + ∂w/∂z = 0 for an irregular sea (central differences: truncation
+    (k δ)²/6 ~ 1e-9 relative; a wrong sign or profile of w leaves a residual of order 1)."""
+    wave = JONSWAP(hs=3.0, tp=9.0, seed=4, n_components=40)
+    t, x, z, d = np.array([3.0, 11.7, 25.2]), 4.0, np.array([-20.0, -6.0, -1.5]), 1e-4
+    u_p, _ = particle_velocity(wave, t, x + d, z, depth=depth)
+    u_m, _ = particle_velocity(wave, t, x - d, z, depth=depth)
+    _, w_p = particle_velocity(wave, t, x, z + d, depth=depth)
+    _, w_m = particle_velocity(wave, t, x, z - d, depth=depth)
+    du_dx, dw_dz = (u_p - u_m) / (2 * d), (w_p - w_m) / (2 * d)
+    assert np.abs(du_dx).max() > 1e-2  # a real gradient, not two zeros
+    np.testing.assert_allclose(du_dx + dw_dz, 0.0, atol=1e-7 * np.abs(du_dx).max())
+
+
+def test_kinematics_scalar_and_array_times_agree_and_ramp():
+    """One time (a solver stage) and a time series take different routes: same numbers; the
+    ramp scales both velocities by ½(1 − cos πt/T_r) (none at all when T_r = 0, even t < 0)."""
+    wave = JONSWAP(hs=2.0, tp=7.0, seed=2, n_components=30, direction=0.3)
+    z = np.array([-30.0, -3.0])
+    line = AiryKinematics(wave, z, 2.0, -1.0, depth=50.0, ramp=10.0)
+    t = np.array([-1.0, 0.0, 4.0, 10.0, 33.3])
+    series_u, series_w = line.speed(t), line.vertical(t)
+    for i, ti in enumerate(t):
+        np.testing.assert_allclose(line.speed(ti), series_u[i], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(line.vertical(ti), series_w[i], rtol=1e-12, atol=1e-15)
+    bare = AiryKinematics(wave, z, 2.0, -1.0, depth=50.0)
+    np.testing.assert_allclose(series_u[2], bare.speed(4.0) * 0.5 * (1 - np.cos(0.4 * np.pi)),
+                               rtol=1e-12)
+    assert np.all(series_u[:2] == 0.0) and np.all(series_w[:2] == 0.0)
+    np.testing.assert_allclose(bare.speed(-1.0), bare.speed(np.array([-1.0]))[0], rtol=1e-12)
+    ux, uy = line.components(t)
+    np.testing.assert_allclose(np.hypot(ux, uy), np.abs(series_u), rtol=1e-14)
+    np.testing.assert_allclose(uy[2:] / ux[2:], np.tan(0.3), rtol=1e-12)  # zeros before t = 0
+
+
+def test_kinematics_below_the_seabed_is_an_input_error():
+    with pytest.raises(InputError, match="below the seabed"):
+        particle_velocity(Regular(8.0, 1.0), 0.0, 0.0, [-5.0, -21.0], depth=20.0)
+    with pytest.raises(InputError, match="ramp"):
+        AiryKinematics(Regular(8.0, 1.0), [-1.0], ramp=-1.0)

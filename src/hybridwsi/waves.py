@@ -29,6 +29,7 @@ width Δω over ``omega_range``), amplitudes ``a_j = sqrt(2 S(ω_j) Δω)`` and 
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -334,6 +335,141 @@ def ramp_factor(t: np.ndarray, ramp: float) -> np.ndarray:
     on = t < ramp  # the cosine only where the ramp acts (long runs: a few % of the samples)
     out[on] = 0.5 * (1 - np.cos(np.pi * np.clip(t[on], 0, ramp) / ramp))
     return out
+
+
+def _airy_profile(k: np.ndarray, z: np.ndarray, depth: float, sign: float) -> np.ndarray:
+    """``(e^{kz} + sign e^{-k(z + 2h)}) / (1 - e^{-2kh})``, shape (n_z, n_k): cosh (sign +1) or
+    sinh (sign −1) of ``k (z + h)`` over ``sinh(k h)`` without overflow at large ``k h``;
+    ``e^{kz}`` in deep water (``depth = inf``)."""
+    kz = np.outer(z, k)
+    if np.isinf(depth):
+        return np.exp(kz)
+    kh = np.asarray(k) * depth
+    return (np.exp(kz) + sign * np.exp(-kz - 2.0 * kh)) / -np.expm1(-2.0 * kh)
+
+
+def airy_depth_factor(k: np.ndarray, z: np.ndarray, depth: float) -> np.ndarray:
+    """``cosh(k (z + h)) / sinh(k h)`` for every (z, k) pair, shape (n_z, n_k): the depth
+    profile of the horizontal Airy particle velocity per unit ``a ω`` (deep water ``e^{kz}``)."""
+    return _airy_profile(k, z, depth, 1.0)
+
+
+def airy_vertical_factor(k: np.ndarray, z: np.ndarray, depth: float) -> np.ndarray:
+    """``sinh(k (z + h)) / sinh(k h)`` for every (z, k) pair, shape (n_z, n_k): the depth
+    profile of the vertical Airy particle velocity per unit ``a ω`` (deep water ``e^{kz}``)."""
+    return _airy_profile(k, z, depth, -1.0)
+
+
+class AiryKinematics:
+    """Linear (Airy) wave particle velocity at points on one vertical line ``(x, y, z_i)``.
+
+    For a wave of components ``η = Σ a_j cos(ω_j t + φ_j)`` at the origin travelling in its
+    direction β, with ``k_j`` from the finite-depth dispersion relation and
+    ``θ_j = ω_j t + φ_j − k_j (x cos β + y sin β)``:
+
+        u = Σ_j a_j ω_j cosh(k_j (z + h)) / sinh(k_j h) cos θ_j    (horizontal, along β)
+        w = −Σ_j a_j ω_j sinh(k_j (z + h)) / sinh(k_j h) sin θ_j   (vertical, up)
+
+    (deep water: both profiles ``e^{k z}``), so that ``w(z = 0) = ∂η/∂t`` and
+    ``∂u/∂s + ∂w/∂z = 0``. An optional half-cosine ramp (:func:`ramp_factor`) multiplies both.
+    Everything that does not depend on t is computed once here: the line is evaluated at
+    many times (a time-stepping solver calls it every stage).
+
+    Parameters
+    ----------
+    wave : Wave
+        The incident wave (:class:`Regular`, :class:`JONSWAP`, ...).
+    z : array_like, shape (n_z,)
+        Heights of the points [m] (global z, up from the still-water level), ``z >= -h``.
+    x, y : float
+        Horizontal position of the line [m].
+    depth : float
+        Water depth h [m] (``inf`` for deep water).
+    g : float
+        Gravity [m/s²] of the dispersion relation.
+    ramp : float
+        Half-cosine ramp duration [s] (0: none).
+
+    Attributes
+    ----------
+    omega, phase : ndarray, shape (n_comp,)
+        Component frequencies [rad/s] and phases [rad] at the line (``φ_j − k_j s``);
+        components of zero amplitude are dropped.
+    profile : ndarray, shape (n_z, n_comp)
+        ``a_j ω_j cosh(k_j (z + h)) / sinh(k_j h)`` [m/s], the horizontal amplitudes.
+    vertical_profile : ndarray, shape (n_z, n_comp)
+        ``a_j ω_j sinh(k_j (z + h)) / sinh(k_j h)`` [m/s], the vertical amplitudes.
+    cos_beta, sin_beta : float
+        Direction cosines of the propagation direction β.
+    ramp : float
+        Ramp duration [s].
+    """
+
+    def __init__(self, wave: Wave, z: Any, x: float = 0.0, y: float = 0.0,
+                 depth: float = np.inf, g: float = G, ramp: float = 0.0) -> None:
+        z = np.atleast_1d(np.asarray(z, dtype=float))
+        if z.ndim != 1 or not np.all(np.isfinite(z)):
+            raise InputError("wave kinematics: z must be finite heights [m]")
+        if not depth > 0:
+            raise InputError(f"water depth must be > 0, got {depth}")
+        if np.any(z < -depth):
+            raise InputError(f"wave kinematics: point at z = {z.min():g} m is below the seabed "
+                             f"(depth {depth:g} m)")
+        ramp_factor(np.zeros(1), ramp)  # validates the ramp (finite, >= 0)
+        comp = wave.components()
+        keep = comp.amplitude > 0
+        omega, amp = comp.omega[keep], comp.amplitude[keep]
+        k = dispersion_k(omega, depth, g)
+        beta = float(getattr(wave, "direction", 0.0))
+        self.cos_beta, self.sin_beta = math.cos(beta), math.sin(beta)
+        # phase at the line's horizontal position, folded into the component phase
+        self.phase = comp.phase[keep] - k * (x * math.cos(beta) + y * math.sin(beta))
+        self.omega = omega
+        self.profile = airy_depth_factor(k, z, depth) * (amp * omega)
+        self.vertical_profile = airy_vertical_factor(k, z, depth) * (amp * omega)
+        self._profile_t = np.ascontiguousarray(self.profile.T)
+        self.ramp = float(ramp)
+
+    def _ramped(self, t: np.ndarray | float, values: np.ndarray) -> np.ndarray:
+        if np.ndim(t) == 0:
+            if self.ramp > 0.0 and float(t) < self.ramp:  # ramp 0: none, even at t < 0
+                values *= 0.5 * (1.0 - math.cos(math.pi * max(float(t), 0.0) / self.ramp))
+            return values
+        return values * ramp_factor(t, self.ramp)[:, None]
+
+    def speed(self, t: float | np.ndarray) -> np.ndarray:
+        """Horizontal velocity along β, u [m/s]: (n_z,) for a scalar t [s], else (nt, n_z)."""
+        if np.ndim(t) == 0:  # one time (a solver stage): a direct matrix-vector product
+            return self._ramped(t, np.cos(self.omega * float(t) + self.phase) @ self._profile_t)
+        c = self.profile * np.exp(-1j * self.phase)  # Re[c e^{-iωt}] = profile cos(ωt + φ)
+        return self._ramped(t, harmonic_sum(np.asarray(t, dtype=float), c.T, self.omega))
+
+    def vertical(self, t: float | np.ndarray) -> np.ndarray:
+        """Vertical velocity w [m/s] (up): (n_z,) for a scalar t [s], else (nt, n_z)."""
+        c = self.vertical_profile * (-1j * np.exp(-1j * self.phase))  # Re[−i P e^{-iθ}] = −P sin θ
+        out = harmonic_sum(np.atleast_1d(np.asarray(t, dtype=float)), c.T, self.omega)
+        return self._ramped(t, out[0] if np.ndim(t) == 0 else out)
+
+    def components(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal velocity components ``(u_x, u_y)`` [m/s], each shaped as :meth:`speed`."""
+        u = self.speed(t)
+        return u * self.cos_beta, u * self.sin_beta
+
+
+def particle_velocity(wave: Wave, t: float | np.ndarray, x: float, z: Any, *, y: float = 0.0,
+                      depth: float = np.inf, g: float = G, ramp: float = 0.0
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Linear Airy particle velocity ``(u, w)`` [m/s] at points ``(x, y, z)`` and times ``t``.
+
+    ``u`` is horizontal along the wave direction β (``u_x = u cos β``, ``u_y = u sin β``), ``w``
+    vertical (up); formulas in :class:`AiryKinematics`. Shapes: ``z`` (n_z,) and ``t`` (nt,)
+    give (nt, n_z); a scalar ``t`` drops the time axis, a scalar ``z`` the point axis.
+    """
+    line = AiryKinematics(wave, z, x, y, depth, g, ramp)
+    u, w = line.speed(t), line.vertical(t)
+    if np.ndim(z) == 0:
+        u, w = u[..., 0], w[..., 0]
+    return u, w
 
 
 def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float

@@ -159,6 +159,47 @@ def linear_force(b: np.ndarray, c: np.ndarray) -> CompiledForce | None:
     return CompiledForce(linear_kernel, _floats(b, c), np.zeros(0, dtype=np.int64))
 
 
+def _quadratic(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
+    # fdata = [Bq diagonal (n)]: out = −Bq |ż| ż (QuadraticDamping.ode_force)
+    for i in range(z.size):
+        out[i] = (-fdata[i] * abs(zdot[i])) * zdot[i]
+    return 0
+
+
+quadratic_kernel = _kernel(_quadratic)
+
+
+def quadratic_force(bq: np.ndarray) -> CompiledForce | None:
+    """``F_i = −Bq_i |ż_i| ż_i`` [N, N m], ``bq`` (n,) the diagonal [N s²/m², N m s²/rad²]."""
+    if not HAVE_NUMBA:
+        return None
+    return CompiledForce(quadratic_kernel, _floats(bq), np.zeros(0, dtype=np.int64))
+
+
+def _rotor(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
+    # fdata = [T, B_aero, lever j (n)]: out = (T − B_aero jᵀż) j (RotorThrust.ode_force)
+    n = z.size
+    v = 0.0
+    for i in range(n):
+        v += zdot[i] * fdata[2 + i]
+    hub = fdata[0] - fdata[1] * v
+    for i in range(n):
+        out[i] = hub * fdata[2 + i]
+    return 0
+
+
+rotor_kernel = _kernel(_rotor)
+
+
+def rotor_force(thrust: float, aero_damping: float, lever: np.ndarray) -> CompiledForce | None:
+    """Hub force ``T − B_aero v_hub`` [N] times the lever ``j`` (n,) (``v_hub = jᵀ ż`` [m/s]):
+    the generalised force [N, N m] of :class:`hybridwsi.forces.rotor.RotorThrust`."""
+    if not HAVE_NUMBA:
+        return None
+    return CompiledForce(rotor_kernel, _floats([thrust, aero_damping], lever),
+                         np.zeros(0, dtype=np.int64))
+
+
 # ------------------------------------------------------------------------------- mooring
 def _mooring(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     # idata = [n_dof, n_lines, nh, nv, dof index × n_dof]
@@ -244,7 +285,7 @@ def _morison(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     # idata = [n_strips, n_dof, n_comp, two_d]; n_comp 0: no wave kinematics
     # fdata = [coef (ns), jx (ns × n_dof), jy (ns × n_dof), omega (nc), phase (nc),
     #          profile (ns × nc), cos β, sin β, ramp, cached t, cached speed (ns)]
-    # the arithmetic of MorisonDrag.generalised_force for one state (and _WaveVelocity.speed)
+    # the arithmetic of MorisonDrag.generalised_force for one state (and AiryKinematics.speed)
     ns, n, nc, two_d = idata[0], idata[1], idata[2], idata[3]
     coef = fdata[:ns]
     jx = fdata[ns:ns + ns * n].reshape((ns, n))
@@ -258,7 +299,7 @@ def _morison(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     if nc > 0 and not fdata[o + 3] == t:  # the wave speed at t, once per distinct t (RK4
         # stages 2 and 3 share their time); the cached t starts as NaN
         speed[:] = profile @ np.cos(omega * t + phase)
-        if t < ramp:
+        if ramp > 0.0 and t < ramp:  # ramp 0: none, even at t < 0
             speed *= 0.5 * (1.0 - math.cos(math.pi * max(t, 0.0) / ramp))
         fdata[o + 3] = t
     for i in range(n):
@@ -288,7 +329,7 @@ def morison_force(coef: np.ndarray, jx: np.ndarray, jy: np.ndarray, two_d: bool,
                   wave: Any = None) -> CompiledForce | None:
     """Morison strip drag ``Q = Σ J_kᵀ dF_k`` (``MorisonDrag.generalised_force``, one state).
 
-    ``jx, jy`` (n_strips, n_dof) the strip Jacobians, ``wave`` the ``_WaveVelocity`` (its
+    ``jx, jy`` (n_strips, n_dof) the strip Jacobians, ``wave`` the strips' ``AiryKinematics`` (its
     ``omega``, ``phase``, ``profile`` (n_strips, n_comp), ``cos_beta``, ``sin_beta``,
     ``ramp``) or None.
     """

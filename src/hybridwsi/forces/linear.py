@@ -10,7 +10,7 @@ is accepted on the command line as an alias.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 import xarray as xr
@@ -152,6 +152,12 @@ class QuadraticDamping(KnownComponent):
 
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
         return -self._diag(z.size) * np.abs(zdot) * zdot
+
+    def compiled_force(self, n_dof: int) -> Any:
+        """Numba kernel of :meth:`ode_force` (``−Bq |ż| ż``), or None without Numba."""
+        from hybridwsi.forces._compiled import quadratic_force  # imports Numba: on demand
+
+        return quadratic_force(self._diag(n_dof))
 
 
 #: CLI names -> component classes (``--known hydrostatic=692.2``); the names are the

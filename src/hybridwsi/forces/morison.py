@@ -30,7 +30,8 @@ wave stretching; linear Airy kinematics (optional).
 
 The wave particle velocity (optional: pass ``wave``, off by default) is the linear Airy
 horizontal velocity of every component of a :class:`hybridwsi.waves.Regular` /
-:class:`~hybridwsi.waves.JONSWAP` wave, in its direction β, at finite depth h:
+:class:`~hybridwsi.waves.JONSWAP` wave, in its direction β, at finite depth h
+(:class:`hybridwsi.waves.AiryKinematics` on the strip centres):
 
     u(x, z, t) = Σ_j a_j ω_j cosh(k_j (z + h)) / sinh(k_j h) cos(ω_j t + φ_j − k_j (x cos β + y sin β))
 
@@ -57,7 +58,7 @@ from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.linear import LinearDamping
-from hybridwsi.waves import Wave, dispersion_k, harmonic_sum, ramp_factor
+from hybridwsi.waves import AiryKinematics, Wave, airy_depth_factor  # noqa: F401 (re-export)
 
 #: default strip length [m] (OC3: 120 strips along the 120 m draft; pure surge is exact for
 #: any length, the pitch-rate moment within 3.5e-5 of 2400 strips; docs/OC3_HYWIND.md)
@@ -163,56 +164,6 @@ def strip_jacobians(strips: Strips, axis_xy: Sequence[float] = (0.0, 0.0),
     return jx, jy
 
 
-def airy_depth_factor(k: np.ndarray, z: np.ndarray, depth: float) -> np.ndarray:
-    """``cosh(k (z + h)) / sinh(k h)`` for every (z, k) pair, shape (n_z, n_k).
-
-    Written ``(e^{kz} + e^{-k(z + 2h)}) / (1 - e^{-2kh})`` so large ``k h`` does not overflow;
-    ``depth = inf`` gives the deep-water ``e^{kz}``.
-    """
-    kz = np.outer(z, k)
-    if math.isinf(depth):
-        return np.exp(kz)
-    kh = np.asarray(k) * depth
-    return (np.exp(kz) + np.exp(-kz - 2.0 * kh)) / -np.expm1(-2.0 * kh)
-
-
-class _WaveVelocity:
-    """Horizontal Airy particle velocity at fixed points: ``u_x, u_y`` [m/s] at time(s) t."""
-
-    def __init__(self, wave: Wave, z: np.ndarray, x: float, y: float, depth: float, g: float,
-                 ramp: float) -> None:
-        comp = wave.components()
-        keep = comp.amplitude > 0
-        omega, amp = comp.omega[keep], comp.amplitude[keep]
-        k = dispersion_k(omega, depth, g)
-        beta = float(getattr(wave, "direction", 0.0))
-        # phase at the strips' horizontal position, folded into the component phase
-        self.phase = comp.phase[keep] - k * (x * math.cos(beta) + y * math.sin(beta))
-        self.omega = omega
-        profile = airy_depth_factor(k, z, depth) * (amp * omega)  # (n_strips, n_comp)
-        self.cos_beta, self.sin_beta = math.cos(beta), math.sin(beta)
-        self.profile = profile
-        self.profile_t = np.ascontiguousarray(profile.T)
-        ramp_factor(np.zeros(1), ramp)  # validates the ramp (finite, >= 0)
-        self.ramp = float(ramp)
-
-    def speed(self, t: float | np.ndarray) -> np.ndarray:
-        """Velocity magnitude along the wave direction [m/s], (n_strips,) or (nt, n_strips)."""
-        if np.ndim(t) == 0:
-            u = np.cos(self.omega * float(t) + self.phase) @ self.profile_t
-            if float(t) < self.ramp:
-                u *= 0.5 * (1.0 - math.cos(math.pi * max(float(t), 0.0) / self.ramp))
-            return u
-        t = np.asarray(t, dtype=float)
-        c = self.profile * np.exp(-1j * self.phase)  # Re[c e^{-iωt}] = profile cos(ωt + φ)
-        return harmonic_sum(t, c.T, self.omega) * ramp_factor(t, self.ramp)[:, None]
-
-    def components(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(u_x, u_y)`` [m/s] at the strips."""
-        u = self.speed(t)
-        return u * self.cos_beta, u * self.sin_beta
-
-
 class MorisonDrag(KnownComponent):
     """Morison strip-theory drag on a vertical body of revolution (module docstring).
 
@@ -273,7 +224,7 @@ class MorisonDrag(KnownComponent):
         self._jx, self._jy = jx[:, idx], jy[:, idx]
         self._jx_t, self._jy_t = np.ascontiguousarray(self._jx.T), np.ascontiguousarray(self._jy.T)
         self.wave = wave
-        self._wave = None if wave is None else _WaveVelocity(
+        self._wave = None if wave is None else AiryKinematics(
             wave, strips.z, float(axis_xy[0]), float(axis_xy[1]), water_depth, g, ramp)
         # the transverse y velocity vanishes when no chosen DOF moves a strip sideways and the
         # wave runs along x (head seas in Surge/Heave/Pitch): skip it then

@@ -115,6 +115,13 @@ class RotorThrust(KnownComponent):
         """Rotor force for rates of shape (n_dof,) or (batch, n_dof) [N, N m]."""
         return np.asarray(self.hub_force(zdot))[..., None] * self.lever
 
+    def compiled_force(self, n_dof: int) -> Any:
+        """Numba kernel of :meth:`ode_force` (``(T − B_aero jᵀż) j``), or None without Numba."""
+        from hybridwsi.forces._compiled import rotor_force  # imports Numba: on demand
+
+        self._check(n_dof)
+        return rotor_force(self.thrust, self.aero_damping, self.lever)
+
     def time_force(self, t: np.ndarray, n_dof: int | None = None) -> np.ndarray:
         """The constant ``T j`` at times ``t``, shape (nt, n_dof) (only without damping)."""
         if not self.time_only:
