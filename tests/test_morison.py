@@ -17,10 +17,9 @@ from hybridwsi.cases import load_case
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
 from hybridwsi.forces.linear import LinearDamping
-from hybridwsi.forces.morison import (MorisonDrag, Strips, additional_damping,
-                                      airy_depth_factor, profile_strips)
+from hybridwsi.forces.morison import MorisonDrag, Strips, additional_damping, profile_strips
 from hybridwsi.history import make_history
-from hybridwsi.waves import JONSWAP, Regular, dispersion_k
+from hybridwsi.waves import JONSWAP, Regular, airy_depth_factor, dispersion_k
 
 RHO, CD, D, L = 1025.0, 0.6, 9.4, 120.0
 K = 0.5 * RHO * CD * D  # ½ ρ Cd D [kg/m²]

@@ -13,8 +13,8 @@
   the state: an exact (nonlinear) hydrostatic force and force components with or without
   internal states (``KnownComponent.ode_force`` / ``state_derivative``); the time-only
   forcing is evaluated at half steps. When the restoring force is linear and every component
-  has a Numba kernel (``KnownComponent.compiled_force``: the linear defaults, the mooring
-  table, Morison drag) and no internal states, the same RK4 runs compiled
+  has a Numba kernel (``KnownComponent.compiled_force``: the linear defaults, quadratic
+  damping, the mooring table, Morison drag, the rotor thrust) and no internal states, the same RK4 runs compiled
   (:mod:`hybridwsi.cummins.compiled`, ~15× faster, equal to rounding); otherwise, or without
   Numba, the NumPy loop below.
 """

@@ -58,7 +58,7 @@ from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.linear import LinearDamping
-from hybridwsi.waves import AiryKinematics, Wave, airy_depth_factor  # noqa: F401 (re-export)
+from hybridwsi.waves import AiryKinematics, Wave
 
 #: default strip length [m] (OC3: 120 strips along the 120 m draft; pure surge is exact for
 #: any length, the pitch-rate moment within 3.5e-5 of 2400 strips; docs/OC3_HYWIND.md)
