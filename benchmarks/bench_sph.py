@@ -5,7 +5,7 @@ particles), with OpenMP on ``OMP_NUM_THREADS`` threads (default 2). The ratio ou
 what to compare between machines; absolute rates depend on the load, so each rate is the best
 of ``--repeat`` timed blocks (the median is printed too) and the 1-min load average is printed.
 OpenMP threads sleep at barriers (``OMP_WAIT_POLICY=passive``, set by ``hybridwsi.sph.run``
-unless given): spinning threads made the 2-thread rate 6x lower whenever another job held a core.
+unless given): spinning threads made the 2-thread rate 2-7x lower whenever another job held a core.
 
     OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--steps2d 100] [--steps3d 10] [--repeat 3]
 
@@ -21,6 +21,11 @@ import os
 import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "2")
+
+#: recorded before/after of the engine-speed work, 2D case, particle-updates/s, best of 5 x 40
+#: steps, load average 2.8-3.0 (docs/SPH_RUNS.md, "Engine speed")
+RECORDED = ("recorded 2D (main 2012cb3 -> now, load 2.8-3.0): 1 thread 9.1-9.4e5 -> 1.04-1.06e6; "
+            "2 threads spinning median 1.7-1.8e5, passive 9.0-9.4e5 -> 0.99-1.02e6")
 
 
 def _time_steps(solver, n_particles: int, steps: int, dt: float, repeat: int
@@ -105,7 +110,7 @@ def main() -> None:
         print(f"  PySPH stock WCSPHScheme (dynamic boundary):                    "
               f"{r_stock[0]:.3g} ({r_stock[1]:.3g}) particle-updates/s")
         print(f"  ratio ours / stock = {r_ours[0] / r_stock[0]:.2f}")
-    print("before/after the engine-speed changes: docs/SPH_RUNS.md, 'Engine speed'")
+    print(RECORDED)
 
 if __name__ == "__main__":
     main()
