@@ -2,11 +2,16 @@
 
 Both are measured in this process on the same particle positions (our case's fluid and wall
 particles), with OpenMP on ``OMP_NUM_THREADS`` threads (default 2). The ratio ours/stock is
-what to compare between machines; absolute rates depend on the load.
+what to compare between machines; absolute rates depend on the load, so each rate is the best
+of ``--repeat`` timed blocks (the median is printed too) and the 1-min load average is printed.
+OpenMP threads sleep at barriers (``OMP_WAIT_POLICY=passive``, set by ``hybridwsi.sph.run``
+unless given): spinning threads made the 2-thread rate 2-7x lower whenever another job held a core.
 
-    OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--steps2d 100] [--steps3d 10]
+    OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--steps2d 100] [--steps3d 10] [--repeat 3]
 
 The first run compiles 4 kernel sets (about a minute each); later runs use PySPH's cache.
+Measured rates before and after the engine-speed work (issue 15 item 9): docs/SPH_RUNS.md,
+section "Engine speed".
 """
 
 from __future__ import annotations
@@ -17,24 +22,36 @@ import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "2")
 
+#: recorded before/after of the engine-speed work, 2D case, particle-updates/s, best of 5 x 40
+#: steps, load average 2.8-3.0 (docs/SPH_RUNS.md, "Engine speed")
+RECORDED = ("recorded 2D (main 2012cb3 -> now, load 2.8-3.0): 1 thread 9.1-9.4e5 -> 1.04-1.06e6; "
+            "2 threads spinning median 1.7-1.8e5, passive 9.0-9.4e5 -> 0.99-1.02e6")
 
-def _time_steps(solver, n_particles: int, steps: int, dt: float) -> float:
+
+def _time_steps(solver, n_particles: int, steps: int, dt: float, repeat: int
+                ) -> tuple[float, float]:
+    """(best, median) particle-updates/s over ``repeat`` blocks of ``steps`` steps."""
     integ = solver.integrator
     integ.initial_acceleration(0.0, dt)
     integ.step(0.0, dt)  # warm-up (first neighbour build)
-    t0 = time.perf_counter()
-    for i in range(steps):
-        integ.step((i + 1) * dt, dt)
-    return n_particles * steps / (time.perf_counter() - t0)
+    rates, k = [], 1
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            integ.step(k * dt, dt)
+            k += 1
+        rates.append(n_particles * steps / (time.perf_counter() - t0))
+    return max(rates), float(sorted(rates)[len(rates) // 2])
 
 
-def ours(case, steps: int) -> float:
+def ours(case, steps: int, repeat: int = 1) -> tuple[float, float]:
     from hybridwsi.sph.run import make_solver
 
-    return _time_steps(make_solver(case, openmp=True), case.n_particles, steps, case.dt)
+    return _time_steps(make_solver(case, openmp=True), case.n_particles, steps, case.dt,
+                       repeat)
 
 
-def stock(case, steps: int) -> float:
+def stock(case, steps: int, repeat: int = 1) -> tuple[float, float]:
     """PySPH's WCSPHScheme (dynamic boundary, Tait, Monaghan AV, XSPH) on the same points."""
     from compyle.config import get_config
     from pysph.base.kernels import WendlandQuintic
@@ -62,7 +79,7 @@ def stock(case, steps: int) -> float:
                           fixed_h=True)
     solver.setup(particles=[fluid, bnd], equations=scheme.get_equations(), nnps=nnps,
                  kernel=kernel, fixed_h=True)
-    return _time_steps(solver, case.n_particles, steps, case.dt)
+    return _time_steps(solver, case.n_particles, steps, case.dt, repeat)
 
 
 def main() -> None:
@@ -72,24 +89,28 @@ def main() -> None:
     ap.add_argument("--steps2d", type=int, default=100)
     ap.add_argument("--steps3d", type=int, default=10)
     ap.add_argument("--skip3d", action="store_true")
+    ap.add_argument("--repeat", type=int, default=3, help="timed blocks per rate (best kept)")
     a = ap.parse_args()
     cases = [("2D hydrostatic tank 2.5 m x 1 m, dp = 0.01 m",
               tank.hydrostatic(dp=0.01, depth=1.0, length=2.5, init="hydrostatic"), a.steps2d)]
     if not a.skip3d:
         cases.append(("3D sphere decay, quarter domain 1.2 x 1.2 x 0.9 m, dp = 0.025 m",
                       tank.decay3d(dp=0.025), a.steps3d))
-    print(f"OMP_NUM_THREADS={os.environ['OMP_NUM_THREADS']}")
-    for desc, case, steps in cases:
-        r_ours = ours(case, steps)
-        r_stock = stock(case, steps)
-        print(f"{desc}: {case.n_particles} particles ({case.fluid.get_number_of_particles()} "
-              f"fluid), {steps} steps")
-        print(f"  hybridwsi tank (Adami walls, density diffusion, body coupling): "
-              f"{r_ours:.3g} particle-updates/s")
-        print(f"  PySPH stock WCSPHScheme (dynamic boundary):                    "
-              f"{r_stock:.3g} particle-updates/s")
-        print(f"  ratio ours / stock = {r_ours / r_stock:.2f}")
+    import hybridwsi.sph.run  # noqa: F401 - sets OMP_WAIT_POLICY before OpenMP loads
 
+    print(f"OMP_NUM_THREADS={os.environ['OMP_NUM_THREADS']} "
+          f"OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}, best (median) of {a.repeat}")
+    for desc, case, steps in cases:
+        r_ours = ours(case, steps, a.repeat)
+        r_stock = stock(case, steps, a.repeat)
+        print(f"{desc}: {case.n_particles} particles ({case.fluid.get_number_of_particles()} "
+              f"fluid), {steps} steps, load average {os.getloadavg()[0]:.2f}")
+        print(f"  hybridwsi tank (Adami walls, density diffusion, body coupling): "
+              f"{r_ours[0]:.3g} ({r_ours[1]:.3g}) particle-updates/s")
+        print(f"  PySPH stock WCSPHScheme (dynamic boundary):                    "
+              f"{r_stock[0]:.3g} ({r_stock[1]:.3g}) particle-updates/s")
+        print(f"  ratio ours / stock = {r_ours[0] / r_stock[0]:.2f}")
+    print(RECORDED)
 
 if __name__ == "__main__":
     main()

@@ -104,29 +104,78 @@ class WallPressureAdami(Equation):
         d_rho[d_idx] = self.rho0 * pow(ratio, 1.0 / self.gamma)
 
 
-class DensityDiffusionFourtakas(Equation):
-    """delta-SPH density diffusion with the hydrostatic part removed.
+class FluidRates(Equation):
+    """Fluid rates from one source array in one pass over each pair (speed; the arithmetic of
+    PySPH's ``ContinuityEquation``, then the density diffusion, then ``MomentumEquation`` with
+    beta = 0 and no tensile correction, in that order, so the result is bitwise the same).
+    One instance per source array: fluid (``delta`` > 0) and solid (``delta`` = 0: no
+    diffusion across the wall, ``alpha`` the fluid-solid viscosity):
 
-    arho_a += delta h c0 sum_b 2 (rho_ab - rho_ab^H) x_ab . grad_a W_ab / |x_ab|^2 m_b / rho_b,
-    rho_ab^H = rho0 (g . x_ab) / c0^2 (linearised Tait). Molteni & Colagrossi (2009),
-    Fourtakas et al. (2019, Comput. Fluids 190:346): without the hydrostatic correction the
-    diffusion drives a spurious flow near the bottom.
+    arho_a += m_b v_ab . grad W_ab  (continuity)
+             + delta h c0 sum_b 2 (rho_ab - rho_ab^H) x_ab . grad_a W_ab / |x_ab|^2 m_b / rho_b,
+    rho_ab^H = rho0 (g . x_ab) / c0^2 (linearised Tait): delta-SPH density diffusion with the
+    hydrostatic part removed (Molteni & Colagrossi 2009; Fourtakas et al. 2019, Comput. Fluids
+    190:346: without the hydrostatic correction it drives a spurious flow near the bottom),
+    a_a += -m_b (p_a/rho_a^2 + p_b/rho_b^2 + Pi_ab) grad W_ab, Pi_ab = -alpha c_ab mu_ab / rho_ab
+    when v_ab . x_ab < 0 (Monaghan's artificial viscosity).
+
+    Why: PySPH's ``MomentumEquation`` asks for ``WDP`` (a second kernel evaluation per pair,
+    only used by its tensile correction) and writes ``dt_cfl`` per pair (unused: fixed dt),
+    and every equation re-reads the pair's properties. Zeroes ``arho`` and the accelerations
+    (PySPH runs every ``initialize`` of a group before any pair loop, so two instances can).
     """
 
-    def __init__(self, dest, sources, delta, c0, rho0, gx=0.0, gy=0.0, gz=0.0, t_ramp=0.0):
-        self.delta, self.c0, self.rho0 = delta, c0, rho0
+    def __init__(self, dest, sources, c0, alpha, delta, rho0, gx=0.0, gy=0.0, gz=0.0,
+                 t_ramp=0.0):
+        self.c0, self.alpha, self.delta, self.rho0 = c0, alpha, delta, rho0
         self.gx, self.gy, self.gz, self.t_ramp = gx, gy, gz, t_ramp
         super().__init__(dest, sources)
 
-    def loop(self, d_idx, s_idx, d_rho, s_rho, s_m, d_arho, XIJ, DWIJ, R2IJ, HIJ, EPS, t):
-        fac = 1.0
-        if t < self.t_ramp:
-            fac = 0.5 * (1.0 - cos(3.141592653589793 * t / self.t_ramp))
-        gdotx = fac * (self.gx * XIJ[0] + self.gy * XIJ[1] + self.gz * XIJ[2])
-        drho = d_rho[d_idx] - s_rho[s_idx] - self.rho0 * gdotx / (self.c0 * self.c0)
-        xdotdw = XIJ[0] * DWIJ[0] + XIJ[1] * DWIJ[1] + XIJ[2] * DWIJ[2]
-        d_arho[d_idx] += (self.delta * HIJ * self.c0 * 2.0 * drho * xdotdw / (R2IJ + EPS)
-                          * s_m[s_idx] / s_rho[s_idx])
+    def initialize(self, d_idx, d_arho, d_au, d_av, d_aw):
+        d_arho[d_idx] = 0.0
+        d_au[d_idx] = 0.0
+        d_av[d_idx] = 0.0
+        d_aw[d_idx] = 0.0
+
+    def loop(self, d_idx, s_idx, d_rho, s_rho, d_p, s_p, d_cs, s_cs, s_m, d_arho, d_au, d_av,
+             d_aw, VIJ, XIJ, DWIJ, R2IJ, HIJ, EPS, RHOIJ1, t):
+        # continuity
+        vijdotdwij = DWIJ[0] * VIJ[0] + DWIJ[1] * VIJ[1] + DWIJ[2] * VIJ[2]
+        d_arho[d_idx] += s_m[s_idx] * vijdotdwij
+        # density diffusion (hydrostatic part removed)
+        if self.delta > 0.0:
+            fac = 1.0
+            if t < self.t_ramp:
+                fac = 0.5 * (1.0 - cos(3.141592653589793 * t / self.t_ramp))
+            gdotx = fac * (self.gx * XIJ[0] + self.gy * XIJ[1] + self.gz * XIJ[2])
+            drho = d_rho[d_idx] - s_rho[s_idx] - self.rho0 * gdotx / (self.c0 * self.c0)
+            xdotdw = XIJ[0] * DWIJ[0] + XIJ[1] * DWIJ[1] + XIJ[2] * DWIJ[2]
+            d_arho[d_idx] += (self.delta * HIJ * self.c0 * 2.0 * drho * xdotdw / (R2IJ + EPS)
+                              * s_m[s_idx] / s_rho[s_idx])
+        # momentum: pressure gradient and artificial viscosity
+        rhoi21 = 1.0 / (d_rho[d_idx] * d_rho[d_idx])
+        rhoj21 = 1.0 / (s_rho[s_idx] * s_rho[s_idx])
+        vijdotxij = VIJ[0] * XIJ[0] + VIJ[1] * XIJ[1] + VIJ[2] * XIJ[2]
+        piij = 0.0
+        if vijdotxij < 0:
+            cij = 0.5 * (d_cs[d_idx] + s_cs[s_idx])
+            muij = (HIJ * vijdotxij) / (R2IJ + EPS)
+            piij = -self.alpha * cij * muij
+            piij = piij * RHOIJ1
+        tmp = d_p[d_idx] * rhoi21 + s_p[s_idx] * rhoj21
+        d_au[d_idx] += -s_m[s_idx] * (tmp + piij) * DWIJ[0]
+        d_av[d_idx] += -s_m[s_idx] * (tmp + piij) * DWIJ[1]
+        d_aw[d_idx] += -s_m[s_idx] * (tmp + piij) * DWIJ[2]
+
+
+class AdvectionVelocity(Equation):
+    """Advection velocity (``ax``, ``ay``, ``az``) = particle velocity: XSPH with eps = 0
+    without its pair loop (the integrator moves particles with ``ax``)."""
+
+    def post_loop(self, d_idx, d_ax, d_ay, d_az, d_u, d_v, d_w):
+        d_ax[d_idx] = d_u[d_idx]
+        d_ay[d_idx] = d_v[d_idx]
+        d_az[d_idx] = d_w[d_idx]
 
 
 class DampingZone(Equation):

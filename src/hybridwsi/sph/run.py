@@ -25,6 +25,14 @@ from hybridwsi.sph.tank import SPHCase, free_surface
 
 CHECKPOINT_VERSION = 2  # 2: real particles only (no mirror ghosts)
 
+# OpenMP threads that wait at the end of a parallel loop sleep instead of spinning. On a shared
+# machine a spinning thread holds a core the other thread (or another job) needs; every
+# parallel loop then waits for a descheduled thread: the 2D benchmark with 2 threads ran
+# 1.5e5 particle-updates/s spinning against 1.0e6 sleeping while another job used one core
+# (docs/SPH_RUNS.md, "Engine speed"). libgomp reads it when PySPH first loads it, so this
+# must run before ``pysph.base.nnps`` is imported; a value the user set is kept.
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
 
 def make_equations(case: SPHCase) -> list:
     """The equation groups shared by all cases (parameter values differ, code does not).
@@ -32,14 +40,15 @@ def make_equations(case: SPHCase) -> list:
     Groups are named: PySPH otherwise numbers them with a process-wide counter that ends up in
     the generated source, so a second case in the same process would be recompiled (~1 min).
     """
-    from pysph.sph.basic_equations import ContinuityEquation, XSPHCorrection
+    from pysph.sph.basic_equations import XSPHCorrection
     from pysph.sph.equation import Group
-    from pysph.sph.wc.basic import MomentumEquation, TaitEOS
+    from pysph.sph.wc.basic import TaitEOS
 
     from hybridwsi.sph.equations import (
+        AdvectionVelocity,
         BodyForceReduce,
         DampingZone,
-        DensityDiffusionFourtakas,
+        FluidRates,
         GravityRamp,
         HoldRelaxation,
         WallForce,
@@ -60,18 +69,19 @@ def make_equations(case: SPHCase) -> list:
               name="wall_bc", post=body_boundary_post(case) if case.boundary == "mdbc"
               else None),
         Group(equations=[
-            ContinuityEquation("fluid", ["fluid", "wall"]),
-            DensityDiffusionFourtakas("fluid", ["fluid"], delta=case.delta, c0=case.c0,
-                                      rho0=case.rho0, **grav),
-            # two instances so that fluid-solid pairs can take their own viscosity (both
-            # zero the accelerations in ``initialize``, which PySPH runs before any loop)
-            MomentumEquation("fluid", ["fluid"], c0=case.c0, alpha=case.alpha, beta=0.0),
-            MomentumEquation("fluid", ["wall"], c0=case.c0, alpha=alpha_wall, beta=0.0),
+            # continuity + density diffusion + momentum in one pass per source array
+            FluidRates("fluid", ["fluid"], c0=case.c0, alpha=case.alpha, delta=case.delta,
+                       rho0=case.rho0, **grav),
+            # fluid-solid pairs take their own viscosity and no density diffusion
+            FluidRates("fluid", ["wall"], c0=case.c0, alpha=alpha_wall, delta=0.0,
+                       rho0=case.rho0, **grav),
             GravityRamp("fluid", None, **grav),
             HoldRelaxation("fluid", None),
             DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma,
                         radial=int(case.damping_radial), dim=case.dim),
-            XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps),
+            # the integrator moves particles with (ax, ay, az): XSPH, or the velocity itself
+            XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps) if case.xsph_eps
+            else AdvectionVelocity("fluid", None),
             WallForce("wall", ["fluid"], alpha=alpha_wall),
         ], name="rates"),
         Group(equations=[BodyForceReduce("wall", None)], name="body"),
