@@ -29,13 +29,9 @@ from typing import Any
 
 import numpy as np
 
-try:  # optional accelerator
-    import numba
-    from numba import types as _nt
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    numba = None
-    HAVE_NUMBA = False
+from hybridwsi._numba import HAVE_NUMBA, numba
+
+_nt = numba.types if HAVE_NUMBA else None
 
 #: status codes a kernel may return besides 0 (ok)
 OUTSIDE_TABLE = 1

@@ -25,12 +25,7 @@ from typing import Any
 
 import numpy as np
 
-try:  # optional accelerator
-    import numba
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
-    numba = None
-    HAVE_NUMBA = False
+from hybridwsi._numba import HAVE_NUMBA, numba
 
 #: batches of at least this many cases run the kernel with the cases inner (vectorised over
 #: the batch); smaller ones one case after the other (vectorised over the hidden units)
