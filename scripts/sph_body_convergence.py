@@ -45,14 +45,17 @@ def exact_hold_force(dim: int, g: float) -> float:
 
 
 def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarter",
-            symmetry: str = "mirror", boundary: str = "shepard") -> dict:
+            symmetry: str = "mirror", boundary: str = "shepard", packing: str = "lattice",
+            relax: float = 0.0) -> dict:
     if dim == 3:
         case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
                             smooth_body=smooth, t_release=0.3, domain=domain,
-                            symmetry=symmetry, boundary=boundary)
+                            symmetry=symmetry, boundary=boundary, packing=packing,
+                            relax=relax)
     else:
         case = tank.decay2d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
-                            smooth_body=smooth, t_release=0.3, boundary=boundary)
+                            smooth_body=smooth, t_release=0.3, boundary=boundary,
+                            packing=packing, relax=relax)
     t0 = time.monotonic()
     hist = run_case(case, progress=False)
     res = {"dim": dim, "dp": dp, "R_over_dp": R / dp, "smooth_body": smooth, "hdx": hdx,
@@ -61,6 +64,10 @@ def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarte
            "hold_force_exact": exact_hold_force(dim, case.g)}
     if boundary != "shepard":  # the records before the option stay valid
         res["boundary"] = boundary
+    if packing != "lattice":
+        res["packing"] = packing
+    if relax > 0.0:
+        res.update(relax=relax, t_release=case.t_release)
     if dim == 3:
         res.update(domain=domain, symmetry=symmetry)
         cmp = compare_decay(hist, Z0, z_eq=0.0)
@@ -79,7 +86,7 @@ def _key(r: dict) -> tuple:
     return (r["dim"], r["dp"], r["smooth_body"], r["hdx"],
             r.get("domain", "quarter") if r["dim"] == 3 else "full",
             r.get("symmetry", "wall") if r["dim"] == 3 else "none",
-            r.get("boundary", "shepard"))
+            r.get("boundary", "shepard"), r.get("packing", "lattice"), r.get("relax", 0.0))
 
 
 def main() -> None:
@@ -96,6 +103,11 @@ def main() -> None:
                     help="3D symmetry planes: true mirror planes or fixed walls")
     ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
                     help="body-particle pressure (hybridwsi.sph.mdbc for mdbc)")
+    ap.add_argument("--packing", choices=["lattice", "packed"], default="lattice",
+                    help="initial fluid near the body (hybridwsi.sph.packing for packed)")
+    ap.add_argument("--relax", type=float, default=0.0,
+                    help="damped relaxation during the 0.3 s hold, released once the rms fluid "
+                         "speed is below RELAX sqrt(g d) (0: a fixed hold)")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -112,13 +124,13 @@ def main() -> None:
                                                          extra):
             if dim == 3 and dom == "full" and sym == "wall":
                 continue  # a full domain has no planes: one run covers both
-            key = (dim, dp, sm, hdx, dom, sym, a.boundary)
+            key = (dim, dp, sm, hdx, dom, sym, a.boundary, a.packing, a.relax)
             if any(_key(r) == key for r in done):
                 continue
             print(f"running dim={dim} dp={dp} smooth={sm} hdx={hdx} domain={dom} "
                   f"symmetry={sym}", flush=True)
             done.append(run_one(dim, dp, sm, hdx, *((dom, sym) if dim == 3 else ()),
-                                boundary=a.boundary))
+                                boundary=a.boundary, packing=a.packing, relax=a.relax))
             print(json.dumps(done[-1]), flush=True)
             text = "".join(json.dumps(r) + "\n" for r in done)
             atomic_write(path, lambda tmp, text=text: Path(tmp).write_text(text))

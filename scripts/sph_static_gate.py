@@ -47,6 +47,9 @@ def main() -> None:
     ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
                     help="body-particle pressure: Adami/Shepard at the particle or first-order "
                          "mDBC at its mirror node (hybridwsi.sph.mdbc)")
+    ap.add_argument("--packing", choices=["lattice", "packed"], default="lattice",
+                    help="initial fluid near the body: the cut lattice or the body-fitted "
+                         "packing with consistent masses (hybridwsi.sph.packing)")
     ap.add_argument("--relax", type=float, default=0.0,
                     help="damped relaxation until the rms fluid speed is below RELAX sqrt(g d) "
                          "(--settle is then its longest duration); 0: a fixed settling time")
@@ -62,9 +65,11 @@ def main() -> None:
         setup["boundary"] = a.boundary  # the records of the shepard runs stay valid
     if a.relax > 0.0:
         setup["relax"] = a.relax
+    if a.packing != "lattice":
+        setup["packing"] = a.packing
     done = [json.loads(s) for s in path.read_text().splitlines()] if path.exists() else []
     kw = {"hdx": a.hdx} if a.hdx is not None else {}
-    kw.update(boundary=a.boundary, relax=a.relax)
+    kw.update(boundary=a.boundary, relax=a.relax, packing=a.packing)
     for z in static_gate.HEIGHTS:
         if any(r["setup"] == setup and r["z"] == z for r in done):
             continue

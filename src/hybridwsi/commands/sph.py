@@ -48,6 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--boundary", choices=("shepard", "mdbc"), default=None,
                         help="body cases: body-particle pressure by Shepard extrapolation "
                              "(default) or the first-order mDBC ghost node (docs/SPH_RUNS.md)")
+    parser.add_argument("--packing", choices=("lattice", "packed"), default=None,
+                        help="body cases: the fluid lattice cut by the body (default) or "
+                             "relaxed to a body-fitted packing with masses from the initial "
+                             "density (hybridwsi.sph.packing; docs/SPH_RUNS.md)")
     parser.add_argument("--relax", type=o.nonnegative_float, default=None, metavar="R",
                         help="decay cases: damp the fluid while the body is held and release "
                              "once the rms fluid speed is below R·sqrt(g·depth)")
@@ -75,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
                       t_release=args.hold, sponge=args.sponge, gain=args.gain,
                       domain=args.domain, symmetry=args.symmetry,
                       smooth_body=(False if args.lattice_body else None),
-                      boundary=args.boundary, relax=args.relax)
+                      boundary=args.boundary, relax=args.relax, packing=args.packing)
     if not args.quiet:
         print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} "
               f"s, tf = {case.tf} s -> {out}")

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from hybridwsi.bodies import cap_volume
+
 from hybridwsi.errors import InputError
 from hybridwsi.sph import wavemaker
 
@@ -86,6 +88,11 @@ class SPHCase:
     #: body-particle pressure: ``"shepard"`` (Adami's extrapolation at the particle, the
     #: shipped runs) or ``"mdbc"`` (first order at the mirror node, :mod:`hybridwsi.sph.mdbc`)
     boundary: str = "shepard"
+    #: initial fluid near a body: ``"lattice"`` (the lattice cut by the body, the shipped
+    #: runs) or ``"packed"`` (:mod:`hybridwsi.sph.packing`; masses from the initial density)
+    packing: str = "lattice"
+    #: what the packing did (``pack_around_body``'s info), empty for ``"lattice"``
+    packing_info: dict[str, float] = field(default_factory=dict)
     #: analytic body surface for mDBC: (centre at equilibrium [m], radius [m])
     body_surface: tuple[tuple[float, ...], float] | None = None
     #: pre-release relaxation (:func:`hybridwsi.sph.run.run_case`): the fluid is damped at
@@ -196,6 +203,24 @@ def round_shell(centre: np.ndarray, radius: float, dp: float, nlayers: int,
     return np.vstack(out) + np.asarray(centre)[None, :]
 
 
+def shell_volumes(points: np.ndarray, centre: np.ndarray, radius: float, dp: float,
+                  domain: str = "full") -> np.ndarray:
+    """Volume [m^dim] each particle of a :func:`round_shell` body stands for: its layer's
+    volume (the annulus or spherical shell of width dp about radius R - (k + 1/2) dp, the
+    ``domain``'s share of it in 3D) over the layer's particle count."""
+    dim = points.shape[1]
+    r = np.linalg.norm(points - centre, axis=1)
+    k = np.rint((radius - r) / dp - 0.5).astype(int)
+    rk = radius - (k + 0.5) * dp
+    if dim == 2:
+        layer = 2.0 * math.pi * rk * dp
+    else:
+        share = {"full": 1.0, "half": 0.5, "quarter": 0.25}[domain]
+        layer = share * 4.0 / 3.0 * math.pi * ((rk + 0.5 * dp) ** 3 - (rk - 0.5 * dp) ** 3)
+    counts = np.bincount(k - k.min())[k - k.min()]
+    return layer / counts
+
+
 def _nlayers(hdx: float) -> int:
     # kernel support 2h must be covered by wall particles
     return math.ceil(2.0 * hdx)
@@ -203,8 +228,11 @@ def _nlayers(hdx: float) -> int:
 
 def _arrays(case_dim: int, fluid_pts: np.ndarray, wall_pts: np.ndarray, flags: np.ndarray,
             dp: float, h: float, rho0: float, c0: float, gamma: float, g: float,
-            depth: float, hydrostatic: bool):
-    """PySPH particle arrays with every property the equation set needs."""
+            depth: float, hydrostatic: bool, consistent_mass: bool = False):
+    """PySPH particle arrays with every property the equation set needs.
+
+    ``consistent_mass``: fluid masses rho_i dp^dim from the initial (hydrostatic) density, so
+    that every particle's volume m/rho is the lattice's dp^dim; otherwise rho0 dp^dim."""
     from pysph.base.utils import get_particle_array_wcsph
 
     from hybridwsi.sph.equations import N_BODY, N_PISTON, WALL_PROPS
@@ -223,9 +251,11 @@ def _arrays(case_dim: int, fluid_pts: np.ndarray, wall_pts: np.ndarray, flags: n
         rho = rho0 * (p / B + 1.0) ** (1.0 / gamma)
     else:
         rho = np.full(len(zf), rho0)
-    # mass from the reference density: the initial hydrostatic compression then gives the
-    # right pressure without changing the particle volume lattice
-    fluid = get_particle_array_wcsph(name="fluid", **coords(fluid_pts), h=h, m=rho0 * vol,
+    # rho0 dp^dim (the shipped runs): the hydrostatic density then disagrees with the number
+    # density by ~(d - z) / (100 d) at c0 = 10 sqrt(g d), and the pressure-gradient operator's
+    # p_i sum_j V_j grad W_ij term holds the fluid up: 2 % of g near the bottom (SPH_RUNS.md)
+    m_fluid = (rho if consistent_mass else rho0) * vol
+    fluid = get_particle_array_wcsph(name="fluid", **coords(fluid_pts), h=h, m=m_fluid,
                                      rho=rho)
     wall = get_particle_array_wcsph(name="wall", **coords(wall_pts), h=h, m=rho0 * vol,
                                     rho=rho0)
@@ -515,8 +545,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
                hdx: float = BODY_HDX, t_release: float = 0.0,
                smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
-               symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0
-               ) -> SPHCase:
+               symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
+               packing: str = "lattice") -> SPHCase:
     """Half-submerged circle (2D) or sphere (3D) released from z0 [m] above equilibrium.
 
     ``domain`` (3D): ``"quarter"`` (symmetry planes x = 0 and y = 0; the default without a
@@ -540,8 +570,14 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     velocity is below ``relax`` sqrt(g depth), after at least one acoustic period 4 depth / c0
     (``t_release`` is then the longest hold).
     ``sponge`` [m] (decay cases) is the width of an absorbing layer along the side walls, so that
-    the waves the body radiates are not reflected back onto it."""
+    the waves the body radiates are not reflected back onto it.
+    ``packing``: ``"lattice"`` (the fluid lattice cut by the body, the shipped runs) or
+    ``"packed"`` (the fluid within a few dp of the body relaxed to a body-fitted packing,
+    :func:`hybridwsi.sph.packing.pack_around_body`, and every fluid mass rho_i dp^dim from its
+    initial density: the static gate's set-up, ``docs/SPH_RUNS.md``)."""
     _check_boundary(boundary)
+    if packing not in PACKINGS:
+        raise InputError(f"packing must be one of {', '.join(PACKINGS)}, got {packing!r}")
     if not (math.isfinite(relax) and relax >= 0.0):
         raise InputError(f"relax must be a non-negative fraction of sqrt(g d), got {relax!r}")
     if not (math.isfinite(t_release) and t_release >= 0.0):
@@ -610,8 +646,24 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
         paddle = np.zeros((0, dim))
     pts = np.vstack([walls, paddle, body])
     flags = np.r_[np.zeros(len(walls)), np.ones(len(paddle)), np.full(len(body), 2.0)]
+    packing_info: dict[str, float] = {}
+    if packing == "packed":
+        from hybridwsi.sph.packing import pack_around_body
+
+        # the body's shell particles carry their layer's volume (a few % off dp^dim)
+        vol_solid = np.full(len(pts), dp ** dim)
+        if smooth_body:
+            vol_solid[flags == 2] = shell_volumes(body, centre, radius, dp, domain)
+        fl, packing_info = pack_around_body(
+            fl, pts, centre, radius, dp, hdx * dp, surface=depth,
+            mirror_axes=planes if symmetry == "mirror" else (),
+            n_total=_fluid_count(int(np.sum(pts_all[:, v] < depth)), dp, radius, z0, dim,
+                                 domain),
+            fixed_volumes=vol_solid)
     fluid, wall = _arrays(dim, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
-                          hydrostatic=True)
+                          hydrostatic=True, consistent_mass=(packing == "packed"))
+    if packing == "packed":
+        wall.m[:] = rho0 * vol_solid
     scale = {"full": 1.0, "half": 2.0, "quarter": 4.0}[domain]
     b = wall.body
     # whole-body mass [kg]; BodyForceReduce scales the simulated part's force up by ``scale``
@@ -627,7 +679,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                    hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
                    output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall,
                    damping_radial=sponge > 0.0,
-                   mirror=planes if symmetry == "mirror" else (), boundary=boundary)
+                   mirror=planes if symmetry == "mirror" else (), boundary=boundary,
+                   packing=packing, packing_info=packing_info)
     rest = centre.copy()
     rest[v] = depth  # the stepper places the body at its equilibrium position + body[B_Z]
     case.body_surface = (tuple(float(c) for c in rest), float(radius))
@@ -645,24 +698,38 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     return case
 
 
+def _fluid_count(n_box: int, dp: float, radius: float, z0: float, dim: int, domain: str
+                 ) -> int:
+    """Number of particles of volume dp^dim that fill a tank of ``n_box`` lattice cells below
+    the still-water level less the immersed part of the body (a circle or sphere of
+    ``radius`` [m] centred z0 [m] above the level; its ``domain`` share of it in 3D)."""
+    d = radius - z0  # immersed height
+    if dim == 2:
+        immersed = radius ** 2 * math.acos((radius - d) / radius) - (radius - d) * math.sqrt(
+            max(2.0 * radius * d - d * d, 0.0))
+    else:
+        immersed = {"full": 1.0, "half": 0.5, "quarter": 0.25}[domain] * cap_volume(d, radius)
+    return n_box - round(immersed / dp ** dim)
+
+
 def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_d: float = 0.1,
             half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, boundary: str = "shepard",
-            relax: float = 0.0) -> SPHCase:
+            relax: float = 0.0, packing: str = "lattice") -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
     case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
                       half_width, tf, G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall,
                       hdx=hdx, t_release=t_release, smooth_body=smooth_body,
-                      sponge=sponge, boundary=boundary, relax=relax)
+                      sponge=sponge, boundary=boundary, relax=relax, packing=packing)
     case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
                        "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
                        "sponge": sponge}
-    _record_boundary(case, boundary, relax)
+    _record_boundary(case, boundary, relax, packing)
     return case
 
 
@@ -671,8 +738,8 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
-            symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0
-            ) -> SPHCase:
+            symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
+            packing: str = "lattice") -> SPHCase:
     """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D); walls at
     ``half_width`` [m] from the sphere's axis. ``domain`` ``"quarter"`` (default; symmetry
     planes x = 0 and y = 0), ``"half"`` (y = 0) or ``"full"``; ``symmetry`` ``"mirror"``
@@ -683,14 +750,14 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
                       alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release,
                       smooth_body=smooth_body, sponge=sponge, domain=domain,
-                      symmetry=symmetry, boundary=boundary, relax=relax)
+                      symmetry=symmetry, boundary=boundary, relax=relax, packing=packing)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
                        "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
                        "smooth_body": smooth_body, "sponge": sponge, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary, relax)
+    _record_boundary(case, boundary, relax, packing)
     return case
 
 
@@ -698,7 +765,8 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
               smooth_body: bool = True, gain: float = 1.0, domain: str = "half",
-              symmetry: str = "mirror", boundary: str = "shepard") -> SPHCase:
+              symmetry: str = "mirror", boundary: str = "shepard", packing: str = "lattice"
+              ) -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
     narrow flume (``domain`` ``"half"``: symmetry plane y = 0, or ``"full"``) with a piston
     and a damping zone. ``symmetry``: ``"mirror"`` (true mirror plane) or ``"wall"`` (the
@@ -723,23 +791,27 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
                       probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body,
-                      domain=domain, symmetry=symmetry, boundary=boundary)
+                      domain=domain, symmetry=symmetry, boundary=boundary, packing=packing)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body, "gain": gain, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary)
+    _record_boundary(case, boundary, packing=packing)
     return case
 
 
-def _record_boundary(case: SPHCase, boundary: str, relax: float = 0.0) -> None:
-    """Record a non-default body boundary and relaxation in the case inputs (the defaults are
-    left out, so the inputs, checkpoints and histories of the shipped runs are unchanged)."""
+def _record_boundary(case: SPHCase, boundary: str, relax: float = 0.0,
+                     packing: str = "lattice") -> None:
+    """Record a non-default body boundary, relaxation and packing in the case inputs (the
+    defaults are left out, so the inputs, checkpoints and histories of the shipped runs are
+    unchanged)."""
     if boundary != "shepard":
         case.inputs["boundary"] = boundary
     if relax > 0.0:
         case.inputs["relax"] = relax
+    if packing != "lattice":
+        case.inputs["packing"] = packing
 
 
 def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
@@ -759,6 +831,8 @@ def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
 
 
 BOUNDARIES = ("shepard", "mdbc")
+#: initial fluid near a body (``_body_case``'s ``packing``)
+PACKINGS = ("lattice", "packed")
 
 
 def _check_boundary(boundary: str) -> None:
