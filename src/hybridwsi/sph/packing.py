@@ -128,7 +128,7 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
     if n_total is not None and n_total != len(pos):
         n_added = int(n_total - len(pos))
         band_pts = _recount(pos[moving], pos[~moving], n_added, centre, radius, dp,
-                            surface, band, mirror_axes)
+                            surface, band, (pos.min(axis=0), pos.max(axis=0)))
         pos = np.vstack([pos[~moving], band_pts])
         moving = np.r_[np.zeros(len(pos) - len(band_pts), bool), np.ones(len(band_pts), bool)]
     # fixed sources: the solids, the far fluid, a lattice cap above the still-water level
@@ -179,9 +179,10 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
 
 def _recount(band_pts: np.ndarray, others: np.ndarray, n_add: int, centre: np.ndarray,
              radius: float, dp: float, surface: float, band: float,
-             mirror_axes: Sequence[int]) -> np.ndarray:
+             box: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """``band_pts`` with ``n_add`` points added where the band's holes are largest (on a
-    half-spacing grid, clear of the body, the free surface and the symmetry planes) or, for ``n_add`` < 0, with the most crowded points removed."""
+    half-spacing grid inside the fluid's box, clear of the body and the free surface) or,
+    for ``n_add`` < 0, with the most crowded points removed."""
     dim = band_pts.shape[1]
     pts = band_pts.copy()
     if n_add < 0:
@@ -196,8 +197,7 @@ def _recount(band_pts: np.ndarray, others: np.ndarray, n_add: int, centre: np.nd
     r = np.linalg.norm(cand - centre, axis=1)
     ok = (r > radius + 0.5 * dp) & (r < radius + (band - 1.0) * dp)
     ok &= cand[:, dim - 1] < surface - 0.5 * dp
-    for ax in mirror_axes:
-        ok &= cand[:, ax] > 0.5 * dp
+    ok &= np.all((cand >= box[0]) & (cand <= box[1]), axis=1)
     cand = cand[ok]
     for _ in range(n_add):
         d, _ = cKDTree(np.vstack([pts, others])).query(cand)
