@@ -29,7 +29,9 @@ from pathlib import Path
 from hybridwsi.bodies import cap_volume
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import tank
-from hybridwsi.sph.decay import compare_decay, crossing_periods, first_extrema
+from hybridwsi.history import fit_damped_oscillator
+from hybridwsi.sph.decay import (TE0, compare_decay, crossing_periods, first_extrema,
+                                 grid_convergence)
 from hybridwsi.sph.run import run_case
 
 R = 0.15
@@ -46,14 +48,14 @@ def exact_hold_force(dim: int, g: float) -> float:
 
 def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarter",
             symmetry: str = "mirror", boundary: str = "shepard", packing: str = "lattice",
-            relax: float = 0.0) -> dict:
+            relax: float = 0.0, tf: float = 1.0) -> dict:
     if dim == 3:
-        case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
+        case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=tf, hdx=hdx,
                             smooth_body=smooth, t_release=0.3, domain=domain,
                             symmetry=symmetry, boundary=boundary, packing=packing,
                             relax=relax)
     else:
-        case = tank.decay2d(dp=dp, depth=0.6, half_width=0.75, tf=1.0, hdx=hdx,
+        case = tank.decay2d(dp=dp, depth=0.6, half_width=0.75, tf=tf, hdx=hdx,
                             smooth_body=smooth, t_release=0.3, boundary=boundary,
                             packing=packing, relax=relax)
     t0 = time.monotonic()
@@ -68,6 +70,15 @@ def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarte
         res["packing"] = packing
     if relax > 0.0:
         res.update(relax=relax, t_release=case.t_release)
+    if tf != 1.0:
+        res["tf"] = tf
+    # damped period, damping ratio and equilibrium over [0, 2.5 Te0] (or the record), free
+    # equilibrium (issue 15, item 5)
+    t = hist["time"].values
+    fit = fit_damped_oscillator(t, hist["z"].values[:, 0] / Z0, TE0,
+                                (0.0, min(2.5 * TE0, float(t[-1]))))
+    res.update(T_d=fit["period_d"], zeta=fit["zeta"], z_eq_fit=fit["z_eq"],
+               fit_window=min(2.5 * TE0, float(t[-1])))
     if dim == 3:
         res.update(domain=domain, symmetry=symmetry)
         cmp = compare_decay(hist, Z0, z_eq=0.0)
@@ -86,7 +97,8 @@ def _key(r: dict) -> tuple:
     return (r["dim"], r["dp"], r["smooth_body"], r["hdx"],
             r.get("domain", "quarter") if r["dim"] == 3 else "full",
             r.get("symmetry", "wall") if r["dim"] == 3 else "none",
-            r.get("boundary", "shepard"), r.get("packing", "lattice"), r.get("relax", 0.0))
+            r.get("boundary", "shepard"), r.get("packing", "lattice"), r.get("relax", 0.0),
+            r.get("tf", 1.0))
 
 
 def main() -> None:
@@ -108,6 +120,9 @@ def main() -> None:
     ap.add_argument("--relax", type=float, default=0.0,
                     help="damped relaxation during the 0.3 s hold, released once the rms fluid "
                          "speed is below RELAX sqrt(g d) (0: a fixed hold)")
+    ap.add_argument("--tf", type=float, default=1.0,
+                    help="simulated time after release [s] (2.5 Te0 = 1.89 s for the T_d, zeta "
+                         "fit over its whole window)")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -124,16 +139,37 @@ def main() -> None:
                                                          extra):
             if dim == 3 and dom == "full" and sym == "wall":
                 continue  # a full domain has no planes: one run covers both
-            key = (dim, dp, sm, hdx, dom, sym, a.boundary, a.packing, a.relax)
+            key = (dim, dp, sm, hdx, dom, sym, a.boundary, a.packing, a.relax, a.tf)
             if any(_key(r) == key for r in done):
                 continue
             print(f"running dim={dim} dp={dp} smooth={sm} hdx={hdx} domain={dom} "
                   f"symmetry={sym}", flush=True)
             done.append(run_one(dim, dp, sm, hdx, *((dom, sym) if dim == 3 else ()),
-                                boundary=a.boundary, packing=a.packing, relax=a.relax))
+                                boundary=a.boundary, packing=a.packing, relax=a.relax,
+                                tf=a.tf))
             print(json.dumps(done[-1]), flush=True)
             text = "".join(json.dumps(r) + "\n" for r in done)
             atomic_write(path, lambda tmp, text=text: Path(tmp).write_text(text))
+    report_gci(done)
+
+
+def report_gci(done: list[dict]) -> None:
+    """Observed order, extrapolation and GCI of each set-up's three finest 3D runs."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in done:
+        if r["dim"] == 3:
+            groups.setdefault(_key(r)[2:], []).append(r)
+    for key, runs in groups.items():
+        runs = sorted(runs, key=lambda r: r["dp"])[:3]
+        if len(runs) < 3:
+            continue
+        hs = tuple(r["dp"] for r in runs)
+        for q in ("T_d", "zeta", "trough_sim", "period_extrema_sim", "hold_force"):
+            if all(q in r for r in runs):
+                g = grid_convergence(tuple(r[q] for r in runs), hs)
+                print(f"{key} {q}: values {[round(r[q], 5) for r in runs]} at dp {hs}: "
+                      f"order {g['order']:.2f}, extrapolated {g['extrapolated']:.5g}, "
+                      f"GCI {100 * g['gci_fine']:.2f} %, monotone {g['monotone']}")
 
 
 if __name__ == "__main__":

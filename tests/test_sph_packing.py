@@ -133,3 +133,37 @@ def test_shell_volumes_add_up_to_the_shell(dp, domain, quarter, half):
     ring = tank.round_shell(np.zeros(2), R, dp, n)
     v2 = tank.shell_volumes(ring, np.zeros(2), R, dp)
     assert v2.sum() == pytest.approx(math.pi * (R ** 2 - (R - n * dp) ** 2), rel=1e-12)
+
+
+@pytest.mark.parametrize("h", [(1.0, 1.25, 1.5625), (1.0, 1.2, 1.5), (0.0214, 0.025, 0.03)])
+def test_grid_convergence_recovers_order_and_limit(h):
+    from hybridwsi.sph.decay import grid_convergence
+
+    # f(h) = f0 + C h^p: the observed order is p, the extrapolation f0, for equal and unequal
+    # refinement ratios (Celik et al. 2008)
+    f0, c, p = 0.770, 0.35, 2.0
+    out = grid_convergence(tuple(f0 + c * x ** p for x in h), h)
+    assert out["order"] == pytest.approx(p, rel=1e-8)
+    assert out["extrapolated"] == pytest.approx(f0, rel=1e-10)
+    assert out["monotone"]
+    # in the asymptotic range the GCI is the safety factor times f1's true relative error
+    f1 = f0 + c * h[0] ** p
+    assert out["gci_fine"] == pytest.approx(1.25 * abs(f1 - f0) / f1, rel=1e-8)
+    # oscillating or diverging triples are flagged
+    assert not grid_convergence((1.0, 1.1, 1.05), h)["monotone"]
+
+
+def test_damped_oscillator_fit_recovers_period_damping_and_equilibrium():
+    from hybridwsi.history import fit_damped_oscillator
+
+    t = np.arange(0.0, 1.9, 0.005)
+    td, zeta, zeq = 0.770, 0.088, 0.002
+    wd = 2 * math.pi / td
+    sigma = zeta * wd / math.sqrt(1 - zeta ** 2)
+    z = 0.03 * np.exp(-sigma * t) * np.cos(wd * t + 0.1) + zeq
+    z += np.random.default_rng(0).normal(0, 2e-5, t.size)
+    fit = fit_damped_oscillator(t, z, period_guess=0.75)
+    assert fit["period_d"] == pytest.approx(td, rel=1e-3)
+    assert fit["zeta"] == pytest.approx(zeta, rel=1e-2)
+    assert fit["z_eq"] == pytest.approx(zeq, abs=1e-4)
+    assert np.isnan(fit_damped_oscillator(t[:10], z[:10], 0.75)["period_d"])

@@ -9,6 +9,8 @@
   Crossings are taken about the equilibrium: TimeHistory ``z`` is measured from it, so the
   default level is 0; a record about a shifted mean passes its level (or ``None`` to use the
   record's mean, right for steady oscillations).
+- :func:`fit_damped_oscillator`: damped period, damping ratio and equilibrium of a decay
+  record (free-decay validation: Kramer drops, SPH decays).
 """
 
 from __future__ import annotations
@@ -340,3 +342,41 @@ def mean_crossing_period(
     if tc.size < 2:
         return float("nan")
     return float(2.0 * np.mean(np.diff(tc)))
+
+
+def fit_damped_oscillator(t: np.ndarray, z: np.ndarray, period_guess: float,
+                          window: tuple[float, float] | None = None,
+                          sigma_guess: float = 0.8) -> dict[str, float]:
+    """Least-squares fit of z ~ A exp(-sigma s) cos(omega_d s + phi) + c, s = t - t_first,
+    over ``window`` (same unit as ``t``, default the whole record).
+
+    The equilibrium ``c`` is free (a decay need not settle where it started from), and the
+    fit starts from six phases to avoid a local minimum. Returns ``period_d`` = 2 pi /
+    omega_d (unit of ``t``), ``sigma`` (1/unit of ``t``), the damping ratio ``zeta`` =
+    sigma / sqrt(sigma^2 + omega_d^2), ``z_eq`` = c and ``amplitude`` = A (unit of ``z``) and
+    ``rms`` of the residual; all NaN with fewer than 20 finite samples in the window.
+    """
+    from scipy.optimize import least_squares
+
+    t, z = np.asarray(t, dtype=float), np.asarray(z, dtype=float)
+    sel = np.isfinite(z) & np.isfinite(t)
+    if window is not None:
+        sel &= (t >= window[0]) & (t <= window[1])
+    tt, zz = t[sel], z[sel]
+    keys = ("period_d", "sigma", "zeta", "z_eq", "amplitude", "rms")
+    if tt.size < 20:
+        return dict.fromkeys(keys, float("nan"))
+    s = tt - tt[0]
+
+    def res(p: np.ndarray) -> np.ndarray:
+        a, sig, w, ph, c = p
+        return a * np.exp(-sig * s) * np.cos(w * s + ph) + c - zz
+
+    amp = float(np.abs(zz).max())
+    fits = [least_squares(res, [amp, sigma_guess, 2 * np.pi / period_guess, ph, 0.0])
+            for ph in np.linspace(-np.pi, np.pi, 6, endpoint=False)]
+    a, sig, w, _, c = min(fits, key=lambda f: f.cost).x
+    w = abs(w)
+    return {"period_d": float(2 * np.pi / w), "sigma": float(sig),
+            "zeta": float(sig / np.hypot(sig, w)), "z_eq": float(c), "amplitude": float(a),
+            "rms": float(np.sqrt(np.mean(res(np.array([a, sig, w, _, c])) ** 2)))}

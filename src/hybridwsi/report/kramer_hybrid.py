@@ -748,21 +748,9 @@ def decay_rate(t: np.ndarray, z: np.ndarray, te0: float,
                window: tuple[float, float] = (1.0, 5.0)) -> float:
     """Decay rate σ [1/s] of a damped oscillator ``A e^{−σt} cos(ωt + φ) + c`` fitted to z
     over ``window`` (units of ``te0``; the first, release-dominated half cycle left out)."""
-    from scipy.optimize import least_squares
+    from hybridwsi.history import fit_damped_oscillator
 
-    sel = (t >= window[0] * te0) & (t <= window[1] * te0) & np.isfinite(z)
-    tt, zz = t[sel], z[sel]
-    if tt.size < 20:
-        return float("nan")
-    amp = float(np.abs(zz).max())
-
-    def res(p: np.ndarray) -> np.ndarray:
-        a, s, w, ph, c = p
-        return a * np.exp(-s * (tt - tt[0])) * np.cos(w * (tt - tt[0]) + ph) + c - zz
-
-    fits = [least_squares(res, [amp, 0.8, 2 * np.pi / te0, ph, 0.0])
-            for ph in np.linspace(-np.pi, np.pi, 6, endpoint=False)]
-    return float(min(fits, key=lambda f: f.cost).x[1])
+    return fit_damped_oscillator(t, z, te0, (window[0] * te0, window[1] * te0))["sigma"]
 
 
 def decay_measures(t: np.ndarray, zn: np.ndarray, setup: KramerSetup,
