@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 
 from hybridwsi.bodies import cap_volume
-
 from hybridwsi.errors import InputError
 from hybridwsi.sph import wavemaker
 
