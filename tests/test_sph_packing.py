@@ -9,7 +9,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from hybridwsi.bodies import cap_volume
-from hybridwsi.sph import packing, tank
+from hybridwsi.sph import tank
+from hybridwsi.sph.mdbc import wendland_quintic
 
 pytest.importorskip("pysph")
 
@@ -75,7 +76,7 @@ def _pressure_acceleration(pa, h):
     i, j, r = pairs.row, pairs.col, pairs.data
     keep = r > 0
     i, j, r = i[keep], j[keep], r[keep]
-    dwdz = packing._dwendland_quintic(r, h, 3) / r * (x[i, 2] - src[j, 2])
+    dwdz = wendland_quintic(r, h, 3)[1] / r * (x[i, 2] - src[j, 2])
     term = -m[j] * (pa.p[i] / pa.rho[i] ** 2 + p[j] / rho[j] ** 2) * dwdz
     return np.bincount(i, weights=term, minlength=len(x))
 

@@ -31,12 +31,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-
-def _dwendland_quintic(r: np.ndarray, h: float, dim: int) -> np.ndarray:
-    """dW/dr [1/m^(dim+1)] of the Wendland quintic kernel (PySPH's normalisation)."""
-    sigma = {2: 7.0 / (4.0 * math.pi * h * h), 3: 21.0 / (16.0 * math.pi * h ** 3)}[dim]
-    q = np.minimum(r / h, 2.0)
-    return sigma * (-5.0 * q * (1.0 - 0.5 * q) ** 3) / h
+from hybridwsi.sph.mdbc import wendland_quintic
 
 
 def _mirror(points: np.ndarray, axes: Sequence[int]) -> np.ndarray:
@@ -63,7 +58,7 @@ def kernel_gradient_sums(points: np.ndarray, sources: np.ndarray, h: float,
     i, j, r = pairs.row, pairs.col, pairs.data
     keep = r > 1e-12
     i, j, r = i[keep], j[keep], r[keep]
-    w = _dwendland_quintic(r, h, dim) / r
+    w = wendland_quintic(r, h, dim)[1] / r  # dW/dr / r
     if volumes is not None:
         w = w * volumes[j]
     d = points[i] - sources[j]
