@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from hybridwsi.history import atomic_write
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report import kramer_hybrid as kh
 
@@ -64,8 +65,9 @@ def find(rows: list[dict[str, Any]], **key: Any) -> dict[str, Any] | None:
 
 def append(row: dict[str, Any]) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
-    with RUNS.open("a") as f:
-        f.write(json.dumps(row) + "\n")
+    # the whole file rewritten atomically: an interrupted run never leaves half a line
+    text = (RUNS.read_text() if RUNS.exists() else "") + json.dumps(row) + "\n"
+    atomic_write(RUNS, lambda tmp: Path(tmp).write_text(text))
     print(json.dumps({k: v for k, v in row.items() if not isinstance(v, (list, dict))}),
           flush=True)
 
