@@ -6,8 +6,10 @@
         --png results/sph/decay3d_vs_kramer.png
 
 Prints the comparison (periods, first extrema, RMS of z/H0 over 5 Te0) of each run as JSON.
-With ``--png`` it also draws the runs over the experiment and saves the curves behind the
-figure next to it (same name, ``.nc``).
+With ``--table`` it also prints issue 15's measures (damped period and damping ratio fitted
+over [0, 2.5 Te0], first trough, RMS over [0, 5 Te0]) of the runs beside the experiment and the
+published codes, as a Markdown table. With ``--png`` it also draws the runs over the experiment
+and saves the curves behind the figure next to it (same name, ``.nc``).
 """
 
 import argparse
@@ -18,6 +20,9 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.history import read_netcdf, to_netcdf
+from hybridwsi.importers.kramer import read_kramer_drop
+from hybridwsi.report.validation import (decay_measures, decay_measures_published,
+                                         decay_measures_table)
 from hybridwsi.sph.decay import TE0, compare_decay, load_experiment
 
 
@@ -25,10 +30,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", help="history NetCDF, optionally FILE:LABEL")
     ap.add_argument("--png", default=None, help="figure of the runs over the experiment")
+    ap.add_argument("--table", action="store_true",
+                    help="print the runs' damped fit, trough and RMS beside the published codes")
     a = ap.parse_args()
     exp = load_experiment("01D")
     t = exp["t_over_Te0"].to_numpy()
     labels, curves, report = [], [], {}
+    rows = decay_measures_published("01D", TE0) if a.table else {}
+    measured = read_kramer_drop("01D", normalised=True) if a.table else None
     for spec in a.runs:
         path, _, label = spec.partition(":")
         hist = read_netcdf(path)
@@ -39,7 +48,11 @@ def main() -> None:
         inside = (t >= ts[0]) & (t <= ts[-1])
         curves.append(np.where(inside, np.interp(t, ts, zs), np.nan))
         labels.append(label or Path(path).stem)
+        if a.table:
+            rows[labels[-1]] = decay_measures(hist["time"].values, zs, TE0, measured)
     print(json.dumps(report, indent=1))
+    if a.table:
+        print(decay_measures_table(rows, "01D"))
     if a.png:
         from hybridwsi.report.plots import save, sph_decay_figure
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from hybridwsi.errors import InputError
+from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report.validation import rms_heave_error, score_published_codes
 
 TE0 = 0.7561
@@ -44,3 +45,29 @@ def test_crossing_period_of_a_damped_sinusoid_is_its_damped_period():
     z = np.exp(-0.3 * t) * np.cos(wd * t)
     assert crossing_period(t, z, (0.0, 5.0)) == pytest.approx(0.93, rel=1e-5)
     assert np.isnan(crossing_period(t, z, (0.0, 0.5)))  # fewer than three crossings
+
+
+def test_decay_measures_of_a_damped_oscillator_and_of_the_experiment():
+    """Issue 15's measures: an exact damped oscillator gives back its T_d, ζ, equilibrium and
+    first trough; the experiment gives the numbers the issue quotes (T_d 0.770 s, ζ 0.088,
+    first trough −0.853) and the codes' RMS is the decay table's (LPF2 0.0107)."""
+    from hybridwsi.report.validation import (decay_measures, decay_measures_published,
+                                             decay_measures_table)
+
+    wd, zeta, c = 2 * np.pi / 0.78, 0.09, 0.02
+    sig = zeta * wd / np.sqrt(1 - zeta ** 2)
+    t = np.linspace(0.0, 4.0, 4001)
+    z = (1 - c) * np.exp(-sig * t) * np.cos(wd * t) + c
+    exp = read_kramer_drop("01D", normalised=True)
+    m = decay_measures(t, z, TE0, exp)
+    assert m["period_d"] == pytest.approx(0.78, rel=1e-6)
+    assert m["zeta"] == pytest.approx(zeta, rel=1e-5)
+    assert m["z_eq"] == pytest.approx(c, abs=1e-8)
+    assert m["trough"] == pytest.approx(z[:1000].min(), abs=1e-9)
+    assert np.isnan(decay_measures(t[:2000], z[:2000], TE0, exp)["rms"])  # shorter than 5 Te0
+    rows = decay_measures_published("01D", TE0)
+    assert rows["experiment"]["period_d"] == pytest.approx(0.770, abs=5e-4)
+    assert rows["experiment"]["zeta"] == pytest.approx(0.088, abs=5e-4)
+    assert rows["experiment"]["trough"] == pytest.approx(-0.853, abs=5e-4)
+    assert rows["LPF2"]["rms"] == pytest.approx(0.0107, abs=5e-5)
+    assert decay_measures_table(rows, "01D").count("\n") == len(rows) + 1

@@ -18,7 +18,7 @@ import pandas as pd
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history import mean_crossing_period
+from hybridwsi.history import fit_damped_oscillator, mean_crossing_period
 from hybridwsi.importers.kramer import (
     KRAMER_DROPS,
     kramer_numerical_files,
@@ -158,6 +158,66 @@ def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
         if periods is not None:
             periods[code] = crossing_period(num["time"].values / te0, z, window)
     return out
+
+
+def decay_measures(t: np.ndarray, zn: np.ndarray, te0: float, measured: xr.Dataset,
+                   fit_window: float = 2.5, rms_window: float = 5.0) -> dict[str, float]:
+    """The measures of a decay record that issue 15 puts beside the 11 codes.
+
+    Parameters
+    ----------
+    t, zn : ndarray
+        Time [s] from the release and heave / H0 [-].
+    te0 : float
+        Normalisation period [s].
+    measured : xr.Dataset
+        The experiment's normalised history of the same drop (the RMS reference).
+    fit_window, rms_window : float
+        Ends of the damped-oscillator fit window and of the RMS window, in units of ``te0``.
+
+    Returns
+    -------
+    dict
+        ``period_d`` [s], ``zeta`` [-] and ``z_eq`` [-] of a damped oscillator with a free
+        equilibrium fitted over [0, fit_window te0] (:func:`hybridwsi.history.fit_damped_oscillator`);
+        the first ``trough`` [-] and its time ``trough_t`` [s]; ``rms`` over [0, rms_window te0]
+        as :func:`rms_heave_error` (NaN when the record is shorter).
+    """
+    from hybridwsi.sph.decay import first_extrema  # pure NumPy; no PySPH
+
+    t, zn = np.asarray(t, float), np.asarray(zn, float)
+    fit = fit_damped_oscillator(t, zn, te0, (0.0, fit_window * te0))
+    after = t >= 0.0  # a measured record starts before the release
+    t1, z1, _, _ = first_extrema(t[after], zn[after])
+    try:
+        rms = rms_heave_error(t, zn, measured["time"].values, measured["z"].values[:, 0], te0,
+                              (0.0, rms_window))
+    except InputError:  # record shorter than the RMS window
+        rms = float("nan")
+    return {"period_d": fit["period_d"], "zeta": fit["zeta"], "z_eq": fit["z_eq"],
+            "trough": z1, "trough_t": t1, "rms": rms}
+
+
+def decay_measures_published(drop: str, te0: float) -> dict[str, dict[str, float]]:
+    """:func:`decay_measures` of the experiment (``"experiment"``) and of each published code
+    of one drop (each normalised by its own initial heave, as :func:`score_published_codes`)."""
+    exp = read_kramer_drop(drop, normalised=True)
+    rows = {"experiment": decay_measures(exp["time"].values, exp["z"].values[:, 0], te0, exp)}
+    for code, path in kramer_numerical_files(drop).items():
+        num = read_kramer_numerical(path, require_uniform=False)
+        z = num["z"].values[:, 0]
+        rows[code] = decay_measures(num["time"].values, z / z[0], te0, exp)
+    return rows
+
+
+def decay_measures_table(rows: dict[str, dict[str, float]], drop: str) -> str:
+    """Rows of :func:`decay_measures` as a Markdown table, one line per record."""
+    lines = [f"| {drop} | T_d [s] | zeta | equilibrium / H0 | first trough / H0 | "
+             "RMS(z/H0), [0, 5 Te0] |", "|---|---|---|---|---|---|"]
+    for name, f in rows.items():
+        lines.append(f"| {name} | {f['period_d']:.4f} | {f['zeta']:.4f} | {f['z_eq']:+.4f} | "
+                     f"{f['trough']:+.3f} | {f['rms']:.4f} |")
+    return "\n".join(lines)
 
 
 def run_decay_validation(
