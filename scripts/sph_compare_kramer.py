@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import version
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report.validation import (decay_measures, decay_measures_published,
@@ -35,7 +36,7 @@ def main() -> None:
     a = ap.parse_args()
     exp = load_experiment("01D")
     t = exp["t_over_Te0"].to_numpy()
-    labels, curves, report = [], [], {}
+    labels, curves, report, inputs = [], [], {}, {}
     rows = decay_measures_published("01D", TE0) if a.table else {}
     measured = read_kramer_drop("01D", normalised=True) if a.table else None
     for spec in a.runs:
@@ -48,6 +49,7 @@ def main() -> None:
         inside = (t >= ts[0]) & (t <= ts[-1])
         curves.append(np.where(inside, np.interp(t, ts, zs), np.nan))
         labels.append(label or Path(path).stem)
+        inputs[labels[-1]] = json.loads(hist.attrs.get("inputs", "{}"))
         if a.table:
             rows[labels[-1]] = decay_measures(hist["time"].values, zs, TE0, measured)
     print(json.dumps(report, indent=1))
@@ -62,7 +64,9 @@ def main() -> None:
              "exp_ci95_upper": ("t", exp["ci95_upper"].to_numpy()),
              "heave_over_H0": (("run", "t"), np.array(curves))},
             coords={"t": ("t", t, {"units": "1", "long_name": "t / Te0"}), "run": labels},
-            attrs={"runs": json.dumps(a.runs), "comparison": json.dumps(report)})
+            attrs={"runs": json.dumps(a.runs), "comparison": json.dumps(report),
+                   "run_inputs": json.dumps(inputs), "hybridwsi_version": version(),
+                   "source": "scripts/sph_compare_kramer.py"})
         save(sph_decay_figure(ds), a.png)
         to_netcdf(ds, Path(a.png).with_suffix(".nc"))
         print(f"wrote {a.png} and {Path(a.png).with_suffix('.nc')}")

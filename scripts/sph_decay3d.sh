@@ -1,15 +1,18 @@
 #!/bin/sh
-# 3D heave decay of the Kramer et al. (2021) sphere (drop 0.1 D) on a quarter domain.
-# Smooth shell body, h/dp = 1.5, held 0.3 s before release (the case defaults; see
-# docs/SPH_RUNS.md). dp = 0.03 m = D/10: 74.5k particles, 13.6k steps, about 45 min on 2 cores;
-# dp = 0.0375 m = D/8: 42k particles, about a third of that. Resumable: re-run
-# the same command after an interruption. Then compare with the experiment.
+# 3D heave decay of the Kramer et al. (2021) sphere (drop 0.1 D) on a quarter domain with mirror
+# planes, in the validation tank (depth 0.9 m, walls 1.2 m from the axis) with a 0.5 m sponge
+# along the side walls, from the body-fitted packed start released after a damped relaxation
+# (issue 15; docs/SPH_RUNS.md). dp = 0.03 m = D/10: 63 335 particles, 13 078 steps, 80 min on
+# one core. Resumable: re-run the same command after an interruption. Then compare with the
+# experiment and the 11 published codes, and draw the figure shipped in docs/figures.
 #   DP=0.03 OUT=results/sph sh scripts/sph_decay3d.sh
 set -e
 DP=${DP:-0.03}
 OUT=${OUT:-results/sph}
-export OMP_NUM_THREADS=${OMP_NUM_THREADS:-2}
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 mkdir -p "$OUT"
-hybridwsi sph decay3d --dp "$DP" --out "$OUT/decay3d_dp$DP.nc" --resume --openmp \
-    --checkpoint-every 600
-python scripts/sph_compare_kramer.py "$OUT/decay3d_dp$DP.nc"
+RUN="$OUT/decay3d_dp${DP}_packed_sponge.nc"
+hybridwsi sph decay3d --dp "$DP" --sponge 0.5 --packing packed --relax 1e-3 --out "$RUN" \
+    --resume --openmp --checkpoint-every 300
+python scripts/sph_compare_kramer.py "$RUN:SPH D/$(python -c "print(round(0.3 / $DP))"), packed, sponge 0.5 m" \
+    --table --png "$OUT/decay3d_vs_kramer.png"
