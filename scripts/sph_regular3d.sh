@@ -1,14 +1,13 @@
 #!/bin/sh
 # The paper's sphere (D = 0.3 m, 7.056 kg) in regular waves T = 0.75 s, H = 0.05 m, heave free,
-# in a narrow flume (half width 0.45 m, symmetry plane y = 0) with a Biésel piston and a damping
-# zone. Depth 0.45 m: kh = 3.2, deep water for this wave, half the particles of the 0.9 m tank.
-# The history shipped as src/hybridwsi/data/sph_regular_waves.nc (Table 1's SPH column) was
-# made with the defaults below: dp = D/12, 83 589 particles, 25 226 steps, on 2 cores (OpenMP)
-# here (see docs/SPH_RUNS.md for the wall time). GAIN is the paddle-stroke factor calibrated in
+# in a narrow flume (half width 0.45 m, mirror plane y = 0) with a Biésel piston and a damping
+# zone, from the body-fitted packed start. Depth 0.45 m: kh = 3.2, deep water for this wave,
+# half the particles of the 0.9 m tank. The history shipped as
+# src/hybridwsi/data/sph_regular_waves.nc (Table 1's SPH column) was made with the defaults
+# below: dp = D/12, 70 008 particles, 25 226 steps (see docs/SPH_RUNS.md for the wall time). GAIN is the paddle-stroke factor calibrated in
 # the empty flume at this spacing so that the wave reaching the sphere has the target height:
 #   OMP_NUM_THREADS=1 python scripts/sph_wave_calibration.py --dim 2 --dp 0.025 --iterations 2
 # Resumable: re-run the same command after an interruption.
-#   DP=0.0375 GAIN=1 TF=6 sh scripts/sph_regular3d.sh      # the former coarse run, 14 min
 set -e
 DP=${DP:-0.025}
 DEPTH=${DEPTH:-0.45}
@@ -17,5 +16,5 @@ GAIN=${GAIN:-1.30}
 OUT=${OUT:-results/sph}
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-2}
 mkdir -p "$OUT"
-hybridwsi sph regular3d --dp "$DP" --depth "$DEPTH" --tf "$TF" --gain "$GAIN" \
+hybridwsi sph regular3d --dp "$DP" --depth "$DEPTH" --tf "$TF" --gain "$GAIN" --packing packed \
     --out "$OUT/regular3d_dp${DP}_d${DEPTH}.nc" --resume --openmp --checkpoint-every 300

@@ -98,11 +98,10 @@ def test_case_file_rebuilds_the_shipped_sph_history_set_up():
     with xr.open_dataset(files("hybridwsi.data") / "sph_regular_waves.nc") as ds:
         rec = json.loads(ds.attrs["inputs"])
     cfg = load_case("paper_sphere")["sph_regular_waves"]
-    # the shipped D/12 run predates true mirror planes (issue 15): its plane y = 0 was a wall.
-    # Until the history is re-shipped the case file must say so (symmetry = "wall"); the
-    # default below stands in for that line of cases/paper_sphere.toml
-    cfg = {"symmetry": rec.get("symmetry", "wall"), **cfg}
     case = tank.build("regular3d", **cfg)
+    # the set-up of issue 15: mirror plane y = 0 and the packed start, recorded in the history
+    assert rec["symmetry"] == case.inputs["symmetry"] == "mirror"
+    assert rec["packing"] == case.inputs["packing"] == "packed"
     assert case.n_particles == rec["n_particles"]
     assert case.h == pytest.approx(rec["h"]) and case.dt == pytest.approx(rec["dt"])
     assert case.inputs["stroke"] == pytest.approx(rec["stroke"])  # the calibrated gain too
