@@ -4,8 +4,9 @@
 # zone, from the body-fitted packed start. Depth 0.45 m: kh = 3.2, deep water for this wave,
 # half the particles of the 0.9 m tank. The history shipped as
 # src/hybridwsi/data/sph_regular_waves.nc (Table 1's SPH column) was made with the defaults
-# below: dp = D/12, 70 008 particles, 25 226 steps (see docs/SPH_RUNS.md for the wall time). GAIN is the paddle-stroke factor calibrated in
-# the empty flume at this spacing so that the wave reaching the sphere has the target height:
+# below: dp = D/12, 70 008 particles, 25 226 steps (see docs/SPH_RUNS.md for the wall time).
+# GAIN is the paddle-stroke factor calibrated in the empty flume at this spacing so that the
+# wave reaching the sphere has the target height:
 #   OMP_NUM_THREADS=1 python scripts/sph_wave_calibration.py --dim 2 --dp 0.025 --iterations 2
 # Resumable: re-run the same command after an interruption.
 set -e
