@@ -14,12 +14,15 @@ and saves the curves behind the figure next to it (same name, ``.nc``).
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import version
+from hybridwsi.cli import EXIT_ERROR, print_error
+from hybridwsi.errors import InputError
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report.validation import (decay_measures, decay_measures_published,
@@ -37,8 +40,8 @@ def main() -> None:
     exp = load_experiment("01D")
     t = exp["t_over_Te0"].to_numpy()
     labels, curves, report, inputs = [], [], {}, {}
-    rows = decay_measures_published("01D", TE0) if a.table else {}
     measured = read_kramer_drop("01D", normalised=True) if a.table else None
+    rows = decay_measures_published("01D", TE0, measured) if a.table else {}
     for spec in a.runs:
         path, _, label = spec.partition(":")
         hist = read_netcdf(path)
@@ -73,4 +76,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except InputError as err:  # a missing or malformed history: one line, exit status 2
+        print_error(str(err))
+        sys.exit(EXIT_ERROR)

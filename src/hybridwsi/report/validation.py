@@ -198,10 +198,12 @@ def decay_measures(t: np.ndarray, zn: np.ndarray, te0: float, measured: xr.Datas
             "trough": z1, "trough_t": t1, "rms": rms}
 
 
-def decay_measures_published(drop: str, te0: float) -> dict[str, dict[str, float]]:
+def decay_measures_published(drop: str, te0: float, measured: xr.Dataset | None = None
+                             ) -> dict[str, dict[str, float]]:
     """:func:`decay_measures` of the experiment (``"experiment"``) and of each published code
-    of one drop (each normalised by its own initial heave, as :func:`score_published_codes`)."""
-    exp = read_kramer_drop(drop, normalised=True)
+    of one drop (each normalised by its own initial heave, as :func:`score_published_codes`);
+    ``measured`` is the experiment's normalised history when the caller already read it."""
+    exp = read_kramer_drop(drop, normalised=True) if measured is None else measured
     rows = {"experiment": decay_measures(exp["time"].values, exp["z"].values[:, 0], te0, exp)}
     for code, path in kramer_numerical_files(drop).items():
         num = read_kramer_numerical(path, require_uniform=False)
