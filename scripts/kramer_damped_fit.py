@@ -10,18 +10,18 @@ over [0, 2.5 Te0] (``hybridwsi.history.fit_damped_oscillator``), the RMS of heav
 
 from __future__ import annotations
 
-import argparse
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.importers.kramer import KRAMER_TE0
 from hybridwsi.report.validation import decay_measures_published, decay_measures_table
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--drop", default="01D", choices=["01D", "03D", "05D"])
     a = ap.parse_args()
     print(decay_measures_table(decay_measures_published(a.drop, KRAMER_TE0), a.drop))
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

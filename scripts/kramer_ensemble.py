@@ -31,7 +31,6 @@ then ``... capacity --iterations 150``; ``... table`` prints the summary.
 
 from __future__ import annotations
 
-import argparse
 import copy
 import json
 import time
@@ -41,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report import kramer_hybrid as kh
@@ -353,7 +353,7 @@ def main() -> None:
 
     torch.set_num_threads(1)
     warnings.simplefilter("ignore")
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("ensemble")
     e.add_argument("--folds", nargs="+", default=list(kh.DROPS))
@@ -373,4 +373,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -16,13 +16,13 @@ the lid (irregular frequencies) on against off. Takes ~5 min more.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import warnings
 
 import numpy as np
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi import bodies
 from hybridwsi.forces import RadiationMemory
 from hybridwsi.hydro import bem
@@ -64,7 +64,7 @@ def release_lead(setup, exp) -> dict[str, float]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    ap = Parser()
     ap.add_argument("--bem", action="store_true")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
@@ -150,4 +150,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

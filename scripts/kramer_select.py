@@ -16,19 +16,19 @@ count.
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 import warnings
 
 import numpy as np
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report import kramer_hybrid as kh
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--iterations", type=int, default=80)
     ap.add_argument("--json", default=None, help="write the curves to this file")
     args = ap.parse_args()
@@ -65,4 +65,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from hybridwsi.cli import run_script
 from hybridwsi.hydro import bem, coefficients
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report import kramer_hybrid as kh
@@ -126,4 +127,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

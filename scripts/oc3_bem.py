@@ -14,16 +14,15 @@ Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem.py).
 
 from __future__ import annotations
 
-import argparse
 import shutil
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from hybridwsi.cases import bem_arguments, load_case
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
@@ -118,7 +117,7 @@ def figure(ds: xr.Dataset, stem: Path = FIGURE) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = Parser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     conv = sub.add_parser("convergence", help="panel-convergence table")
     conv.add_argument("--panel-sizes", type=float, nargs="+", default=[2.0, 1.0, 0.5])
@@ -141,4 +140,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_script(main)

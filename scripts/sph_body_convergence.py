@@ -19,13 +19,13 @@ domain has about three times the particles); the 2D cases take 10 s to 3 min.
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
 import math
 import time
 from pathlib import Path
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.bodies import cap_volume
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import tank
@@ -102,7 +102,7 @@ def _key(r: dict) -> tuple:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/sph_body")
     ap.add_argument("--only", choices=["2d", "3d"], default=None)
     ap.add_argument("--dp", type=float, nargs="*", default=None, help="subset of spacings [m]")
@@ -173,4 +173,4 @@ def report_gci(done: list[dict]) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

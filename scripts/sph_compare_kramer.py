@@ -12,17 +12,14 @@ published codes, as a Markdown table. With ``--png`` it also draws the runs over
 and saves the curves behind the figure next to it (same name, ``.nc``).
 """
 
-import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import version
-from hybridwsi.cli import EXIT_ERROR, print_error
-from hybridwsi.errors import InputError
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report.validation import (decay_measures, decay_measures_published,
@@ -31,7 +28,7 @@ from hybridwsi.sph.decay import TE0, compare_decay, load_experiment
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", help="history NetCDF, optionally FILE:LABEL")
     ap.add_argument("--png", default=None, help="figure of the runs over the experiment")
     ap.add_argument("--table", action="store_true",
@@ -76,8 +73,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except InputError as err:  # a missing or malformed history: one line, exit status 2
-        print_error(str(err))
-        sys.exit(EXIT_ERROR)
+    run_script(main)

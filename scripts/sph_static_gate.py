@@ -19,11 +19,11 @@ with mirror planes) on one core.
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from pathlib import Path
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import static_gate
 
@@ -33,7 +33,7 @@ def _write(path: Path, text: str) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--dp", type=float, default=0.03, help="particle spacing [m] (D/10: 0.03)")
     ap.add_argument("--out", default="results/sph_static")
     ap.add_argument("--depth", type=float, default=0.45, help="still-water depth [m]")
@@ -90,4 +90,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

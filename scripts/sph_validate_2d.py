@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import dam_break, tank, wavemaker
 from hybridwsi.sph.run import run_case
@@ -72,7 +72,7 @@ def waves(out: Path, dp: float, tf: float, alpha: float) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap = Parser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--out", default="results/sph")
     ap.add_argument("--only", choices=["hydrostatic", "dam_break", "waves"], default=None)
     ap.add_argument("--dp-hydro", type=float, default=0.01)
@@ -97,4 +97,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -27,6 +27,7 @@ import json
 import math
 from pathlib import Path
 
+from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
 from hybridwsi.sph import tank, wavemaker
 from hybridwsi.sph.run import run_case
@@ -63,7 +64,7 @@ def measure(dim: int, dp: float, hdx: float, alpha: float, tf: float, gain: floa
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap = Parser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--dim", type=int, choices=(2, 3), default=3)
     ap.add_argument("--dp", type=float, default=0.0375, help="particle spacing [m]")
     ap.add_argument("--hdx", type=float, default=tank.BODY_HDX)
@@ -98,4 +99,4 @@ def main() -> None:
     print(f"gain = {gain:.4f}  (hybridwsi sph regular3d --dp {a.dp:g} --gain {gain:.4f})")
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

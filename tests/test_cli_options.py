@@ -246,3 +246,27 @@ def test_select_dofs_keeps_units_per_dof():
     assert units_per_dof(p, "F_tot") == ["N m"] and p["mass"].shape == (1, 1)
     with pytest.raises(InputError, match="no DOF Heave"):
         select_dofs(h, ("Heave",))
+
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["sph_compare_kramer.py", "no_such_history.nc"], "error: file not found"),
+    (["kramer_damped_fit.py", "--bogus"], "error: kramer_damped_fit.py: unrecognized arguments"),
+])
+def test_scripts_give_one_error_line(tmp_path, args, message):
+    # the scripts in scripts/ handle bad input as the CLI does: one line, exit status 2
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    res = subprocess.run([sys.executable, str(SCRIPTS / args[0]), *args[1:]], cwd=tmp_path,
+                         env=env, capture_output=True, text=True, timeout=120)
+    assert res.returncode == cli.EXIT_ERROR
+    assert res.stderr.startswith(message) and res.stderr.count("\n") == 1, res.stderr
+
+
+def test_every_script_runs_through_the_cli_error_handling():
+    for path in sorted(SCRIPTS.glob("*.py")):
+        text = path.read_text()
+        if '__name__ == "__main__"' in text:
+            assert "run_script(main)" in text, path.name
+            assert "argparse.ArgumentParser(" not in text, path.name

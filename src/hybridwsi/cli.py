@@ -20,6 +20,7 @@ import importlib
 import importlib.util
 import sys
 import warnings
+from collections.abc import Callable
 from typing import NoReturn
 
 from hybridwsi.commands._options import missing_dependency, one_line
@@ -116,6 +117,13 @@ def _run(args: argparse.Namespace) -> int:
         print_error("interrupted (partial results were not written; re-run to resume)")
         return 130
     return EXIT_ERROR
+
+
+def run_script(script_main: Callable[[], int | None]) -> NoReturn:
+    """Run the ``main()`` of a script in ``scripts/`` with the CLI's error handling (bad input,
+    a missing optional extra, an OS error: one ``error:`` line and exit status 2) and exit
+    with its status. Scripts build their parser with :class:`Parser` for usage errors."""
+    sys.exit(_run(argparse.Namespace(_run=lambda _args: script_main())))
 
 
 def main(argv: list[str] | None = None) -> int:
