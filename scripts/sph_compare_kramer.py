@@ -8,7 +8,9 @@
 Prints the comparison (periods, first extrema, RMS of z/H0 over 5 Te0) of each run as JSON.
 With ``--table`` it also prints issue 15's measures (damped period and damping ratio fitted
 over [0, 2.5 Te0], first trough, RMS over [0, 5 Te0]) of the runs beside the experiment and the
-published codes, as a Markdown table. With ``--png`` it also draws the runs over the experiment
+published codes, as a Markdown table; with ``--gci`` (three or more runs at different spacings)
+also the observed order, extrapolated value and grid convergence index of those measures.
+With ``--png`` it also draws the runs over the experiment
 and saves the curves behind the figure next to it (same name, ``.nc``).
 """
 
@@ -22,8 +24,8 @@ from hybridwsi._meta import version
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
-from hybridwsi.report.validation import (decay_measures, decay_measures_published,
-                                         decay_measures_table)
+from hybridwsi.report.validation import (decay_convergence_table, decay_measures,
+                                         decay_measures_published, decay_measures_table)
 from hybridwsi.sph.decay import TE0, compare_decay, load_experiment
 
 
@@ -33,7 +35,11 @@ def main() -> None:
     ap.add_argument("--png", default=None, help="figure of the runs over the experiment")
     ap.add_argument("--table", action="store_true",
                     help="print the runs' damped fit, trough and RMS beside the published codes")
+    ap.add_argument("--gci", action="store_true",
+                    help="with runs at three or more spacings: the grid convergence index of "
+                         "the --table measures (the three finest)")
     a = ap.parse_args()
+    a.table = a.table or a.gci
     exp = load_experiment("01D")
     t = exp["t_over_Te0"].to_numpy()
     labels, curves, report, inputs = [], [], {}, {}
@@ -55,6 +61,8 @@ def main() -> None:
     print(json.dumps(report, indent=1))
     if a.table:
         print(decay_measures_table(rows, "01D"))
+    if a.gci:
+        print(decay_convergence_table({float(inputs[lb]["dp"]): rows[lb] for lb in labels}))
     if a.png:
         from hybridwsi.report.plots import save, sph_decay_figure
 

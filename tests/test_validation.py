@@ -71,3 +71,21 @@ def test_decay_measures_of_a_damped_oscillator_and_of_the_experiment():
     assert rows["experiment"]["trough"] == pytest.approx(-0.853, abs=5e-4)
     assert rows["LPF2"]["rms"] == pytest.approx(0.0107, abs=5e-5)
     assert decay_measures_table(rows, "01D").count("\n") == len(rows) + 1
+
+
+def test_decay_convergence_table_recovers_a_known_order():
+    """Measures that converge as f0 + c dp^2 give back order 2 and the limit f0 (Richardson);
+    fewer than three spacings are refused."""
+    from hybridwsi.report.validation import CONVERGENCE_MEASURES, decay_convergence_table
+
+    limits = {"period_d": 0.770, "zeta": 0.088, "trough": -0.853, "rms": 0.010}
+    rows = {dp: {q: f0 + 3.0 * dp ** 2 for q, f0 in limits.items()}
+            for dp in (0.03, 0.025, 0.0214, 0.04)}  # unsorted, one spacing too many
+    table = decay_convergence_table(rows).splitlines()
+    assert "0.0214, 0.025, 0.03" in table[0] and len(table) == 2 + len(CONVERGENCE_MEASURES)
+    for line, q in zip(table[2:], CONVERGENCE_MEASURES):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert cells[0] == q and float(cells[2]) == pytest.approx(2.0, abs=0.01)
+        assert float(cells[3]) == pytest.approx(limits[q], abs=5e-5) and cells[5] == "yes"
+    with pytest.raises(InputError, match="three spacings"):
+        decay_convergence_table({0.03: rows[0.03], 0.025: rows[0.025]})

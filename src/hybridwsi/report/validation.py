@@ -222,6 +222,43 @@ def decay_measures_table(rows: dict[str, dict[str, float]], drop: str) -> str:
     return "\n".join(lines)
 
 
+#: the measures of :func:`decay_measures` whose grid convergence is reported
+CONVERGENCE_MEASURES = ("period_d", "zeta", "trough", "rms")
+
+
+def decay_convergence_table(rows: dict[float, dict[str, float]]) -> str:
+    """Observed order, extrapolated value and GCI of the :func:`decay_measures` of runs at
+    three or more particle spacings (the three finest; Celik et al. 2008 via
+    :func:`hybridwsi.sph.decay.grid_convergence`), as a Markdown table.
+
+    Parameters
+    ----------
+    rows : dict
+        :func:`decay_measures` results keyed by particle spacing dp [m].
+
+    Returns
+    -------
+    str
+        One line per measure: the values from the finest to the coarsest, the observed order,
+        the extrapolated value, the GCI of the finest run [%] and whether the three are
+        monotone (in the asymptotic range; otherwise the GCI is not to be trusted).
+    """
+    from hybridwsi.sph.decay import grid_convergence  # pure NumPy; no PySPH
+
+    if len(rows) < 3:
+        raise InputError(f"a grid convergence index needs runs at three spacings, got {len(rows)}")
+    dps = sorted(rows)[:3]
+    lines = [f"| measure (dp = {', '.join(f'{d:g}' for d in dps)} m) | values | observed order | "
+             "extrapolated | GCI fine | monotone |", "|---|---|---|---|---|---|"]
+    for q in CONVERGENCE_MEASURES:
+        vals = tuple(rows[d][q] for d in dps)
+        g = grid_convergence(vals, tuple(dps))
+        lines.append(f"| {q} | {' / '.join(f'{v:.4f}' for v in vals)} | {g['order']:.2f} | "
+                     f"{g['extrapolated']:.4f} | {100 * g['gci_fine']:.2f} % | "
+                     f"{'yes' if g['monotone'] else 'no'} |")
+    return "\n".join(lines)
+
+
 def run_decay_validation(
     coeffs: xr.Dataset,
     *,
