@@ -39,6 +39,8 @@ def main() -> None:
                     help="with runs at three or more spacings: the grid convergence index of "
                          "the --table measures (the three finest)")
     a = ap.parse_args()
+    if a.gci and len(a.runs) < 3:
+        ap.error("--gci needs runs at three or more spacings")
     a.table = a.table or a.gci
     exp = load_experiment("01D")
     t = exp["t_over_Te0"].to_numpy()
