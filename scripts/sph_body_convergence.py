@@ -47,8 +47,9 @@ def exact_hold_force(dim: int, g: float) -> float:
 
 
 def run_one(dim: int, dp: float, smooth: bool, hdx: float, domain: str = "quarter",
-            symmetry: str = "mirror", boundary: str = "shepard", packing: str = "lattice",
-            relax: float = 0.0, tf: float = 1.0) -> dict:
+            symmetry: str = "mirror", boundary: str = "shepard",
+            packing: str = tank.BODY_PACKING, relax: float = tank.BODY_RELAX,
+            tf: float = 1.0) -> dict:
     if dim == 3:
         case = tank.decay3d(dp=dp, depth=0.6, half_width=0.75, tf=tf, hdx=hdx,
                             smooth_body=smooth, t_release=0.3, domain=domain,
@@ -115,11 +116,12 @@ def main() -> None:
                     help="3D symmetry planes: true mirror planes or fixed walls")
     ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
                     help="body-particle pressure (hybridwsi.sph.mdbc for mdbc)")
-    ap.add_argument("--packing", choices=["lattice", "packed"], default="lattice",
-                    help="initial fluid near the body (hybridwsi.sph.packing for packed)")
-    ap.add_argument("--relax", type=float, default=0.0,
+    ap.add_argument("--packing", choices=["lattice", "packed"], default=tank.BODY_PACKING,
+                    help="initial fluid near the body (default packed: hybridwsi.sph.packing)")
+    ap.add_argument("--relax", type=float, default=tank.BODY_RELAX,
                     help="damped relaxation during the 0.3 s hold, released once the rms fluid "
-                         "speed is below RELAX sqrt(g d) (0: a fixed hold)")
+                         "speed is below RELAX sqrt(g d) (default %(default)s; 0: a fixed "
+                         "hold)")
     ap.add_argument("--tf", type=float, default=1.0,
                     help="simulated time after release [s] (2.5 Te0 = 1.89 s for the T_d, zeta "
                          "fit over its whole window)")

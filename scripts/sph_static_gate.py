@@ -13,6 +13,9 @@ so the script resumes); the summary goes to ``<out>/static_gate_summary.json``.
 
     OMP_NUM_THREADS=1 python scripts/sph_static_gate.py --dp 0.03 --out results/sph_static
 
+(the defaults: packed start, damped relaxation to 1e-3 sqrt(g d), at most 0.4 s; the lattice
+start of the earlier records is ``--packing lattice --relax 0 --settle 0.1``.)
+
 About 3-4 min per height at D/10 in the default 0.45 m deep, 0.9 m wide tank (quarter domain
 with mirror planes) on one core.
 """
@@ -25,7 +28,7 @@ from pathlib import Path
 
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
-from hybridwsi.sph import static_gate
+from hybridwsi.sph import static_gate, tank
 
 
 def _write(path: Path, text: str) -> None:
@@ -40,19 +43,21 @@ def main() -> None:
     ap.add_argument("--half-width", type=float, default=0.45, help="tank half width [m]")
     ap.add_argument("--periods", type=float, default=5.0,
                     help="acoustic periods 4 d / c0 averaged over (at least 5)")
-    ap.add_argument("--settle", type=float, default=0.1, help="settling time [s] before")
+    ap.add_argument("--settle", type=float, default=0.4,
+                    help="settling time [s] before the average (with --relax: its longest)")
     ap.add_argument("--domain", choices=["quarter", "half", "full"], default="quarter")
     ap.add_argument("--symmetry", choices=["mirror", "wall"], default="mirror")
     ap.add_argument("--hdx", type=float, default=None, help="h/dp (default the case's)")
     ap.add_argument("--boundary", choices=["shepard", "mdbc"], default="shepard",
                     help="body-particle pressure: Adami/Shepard at the particle or first-order "
                          "mDBC at its mirror node (hybridwsi.sph.mdbc)")
-    ap.add_argument("--packing", choices=["lattice", "packed"], default="lattice",
-                    help="initial fluid near the body: the cut lattice or the body-fitted "
-                         "packing with consistent masses (hybridwsi.sph.packing)")
-    ap.add_argument("--relax", type=float, default=0.0,
+    ap.add_argument("--packing", choices=["lattice", "packed"], default=tank.BODY_PACKING,
+                    help="initial fluid near the body: the body-fitted packing with consistent "
+                         "masses (hybridwsi.sph.packing; default) or the cut lattice")
+    ap.add_argument("--relax", type=float, default=tank.BODY_RELAX,
                     help="damped relaxation until the rms fluid speed is below RELAX sqrt(g d) "
-                         "(--settle is then its longest duration); 0: a fixed settling time")
+                         "(--settle is then its longest duration; default %(default)s); 0: a fixed "
+                         "settling time")
     a = ap.parse_args()
     if a.periods < 5:
         ap.error("--periods must be at least 5 (the gate averages over >= 5 acoustic periods)")

@@ -71,9 +71,11 @@ def test_body_cases_use_low_artificial_viscosity():
 
 @pytest.mark.slow
 def test_decay_first_cycle_matches_kramer_dp_d10():
-    # first cycle of the 01D decay at dp = D/10 in a small quarter tank (~6 min on one core):
-    # smooth body, h/dp = 1.5, 0.3 s hold; measured -0.803 H0 at 0.394 s, crest +0.650 at
-    # 0.789 s against the experiment's -0.853 at 0.390 s and +0.630 at 0.770 s
+    # first cycle of the 01D decay at dp = D/10 in a small quarter tank (~5 min on one core):
+    # smooth body, h/dp = 1.5, the defaults' packed start released after the damped
+    # relaxation; measured -0.818 H0 at 0.386 s, crest +0.696, period from the extrema +4.0 %
+    # (docs/SPH_RUNS.md) against the experiment's -0.853 at 0.390 s and +0.630 at 0.770 s
+    # (the small tank's equilibrium rise, 0.032 H0, is in these extrema)
     from hybridwsi.sph.decay import compare_decay
 
     case = tank.decay3d(dp=0.03, depth=0.6, half_width=0.75, tf=1.0)

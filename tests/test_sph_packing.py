@@ -35,16 +35,16 @@ def _surface_distance(pts, z):
 def test_packed_fluid_holds_the_exact_volume(z):
     # quarter tank less a quarter of the immersed spherical cap (closed form), in particles
     exact = (HW * HW * DEPTH - cap_volume(R - z, R) / 4) / DP ** 3
-    lattice = _case(z)
-    packed = _case(z, packing="packed")
+    lattice = _case(z, packing="lattice")
+    packed = _case(z)  # the body cases' default
     assert abs(len(packed.fluid.x) - exact) <= 0.5
     # the cut lattice misses by a few particles at R/dp = 5 (0.5 % of the buoyancy)
     assert abs(len(lattice.fluid.x) - exact) > 1.0
-    assert packed.inputs["packing"] == "packed" and "packing" not in lattice.inputs
+    assert packed.inputs["packing"] == "packed" and lattice.inputs["packing"] == "lattice"
 
 
 def test_packing_fits_the_fluid_to_the_body():
-    lattice, packed = _case(), _case(packing="packed")
+    lattice, packed = _case(packing="lattice"), _case(packing="packed")
     info = packed.packing_info
     # zeroth-order consistency residual dp |sum_j V_j grad W_ij| of the moved particles
     assert info["residual"] < 0.25 * info["residual_start"], info

@@ -18,8 +18,11 @@ from hybridwsi.sph.symmetry import ghost_tag, n_real
 
 pytestmark = pytest.mark.sph
 
-# a small tank: the body is 4 spacings from the side walls
-KW = {"dp": 0.0375, "depth": 0.3, "half_width": 0.3, "t_release": 0.0, "smooth_body": False}
+# a small tank: the body is 4 spacings from the side walls. The lattice start, so that the
+# symmetric domains hold the full domain's particles exactly (the packing of a quarter and of
+# the full tank differ by its last iterations: their forces then agree to 2e-4, measured)
+KW = {"dp": 0.0375, "depth": 0.3, "half_width": 0.3, "t_release": 0.0, "smooth_body": False,
+      "packing": "lattice"}
 
 
 def test_no_walls_on_mirror_planes_and_ghosts_are_images():

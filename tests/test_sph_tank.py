@@ -72,12 +72,15 @@ def test_dam_break_front_10_percent():
 
 def test_fixed_circle_buoyancy():
     # half-submerged circle held fixed: the summed particle force must equal Archimedes'
-    # rho g pi R^2 / 2 per unit length (mean over the last 0.2 s; acoustic waves oscillate)
+    # rho g pi R^2 / 2 per unit length (mean over the last 0.2 s; acoustic waves oscillate).
+    # The default packed start measured -0.10 % here (0.00 % at dp = 0.015 m); the cut
+    # lattice +0.54 % (+0.49 %), which this bound refuses
     case = tank.decay2d(dp=0.03, radius=0.15, depth=0.45, half_width=0.45, z0_over_d=0.0,
                         tf=0.4, free=False, t_release=0.0)
     hist = run_case(case, progress=False)
     f = hist["F_fluid"].sel(dof="Heave").where(hist["time"] >= 0.2, drop=True).mean()
-    assert float(f) == pytest.approx(tank.RHO_WATER * case.g * math.pi * 0.15 ** 2 / 2, rel=0.06)
+    assert float(f) == pytest.approx(tank.RHO_WATER * case.g * math.pi * 0.15 ** 2 / 2,
+                                     rel=0.003)
 
 
 def test_free_circle_released_above_equilibrium():
@@ -221,7 +224,7 @@ def test_relaxation_damps_the_hold_and_releases_when_the_fluid_is_at_rest():
     from hybridwsi.sph.run import fluid_urms
 
     kw = {"dp": 0.03, "radius": 0.15, "depth": 0.45, "half_width": 0.45, "t_release": 0.3,
-          "free": False, "tf": 0.01}
+          "free": False, "tf": 0.01, "packing": "lattice"}
     relaxed = tank.decay2d(relax=0.003, **kw)
     hist = run_case(relaxed, progress=False)
     limit = 0.003 * math.sqrt(tank.G * 0.45)
@@ -230,7 +233,7 @@ def test_relaxation_damps_the_hold_and_releases_when_the_fluid_is_at_rest():
     assert relaxed.relax_tmin <= relaxed.t_release < 0.3 - 1e-9
     assert '"relax": 0.003' in hist.attrs["inputs"]
     assert float(hist["time"].values[0]) == 0.0  # the history starts at the release
-    plain = tank.decay2d(**dict(kw, t_release=relaxed.t_release))
+    plain = tank.decay2d(**dict(kw, t_release=relaxed.t_release, relax=0.0))
     run_case(plain, progress=False)
     assert fluid_urms(plain.fluid) > limit
     assert fluid_urms(relaxed.fluid) < fluid_urms(plain.fluid) / 1.5

@@ -29,7 +29,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="smoothing length over spacing h/dp (body and wave cases)")
     parser.add_argument("--hold", type=o.nonnegative_float, default=None, metavar="S",
                         help="decay cases: seconds the body is held before release "
-                             "(default 0.3; the history starts at the release)")
+                             "(default 0.3, the longest hold with --relax; the history starts "
+                             "at the release)")
     parser.add_argument("--sponge", type=o.nonnegative_float, default=None, metavar="M",
                         help="decay cases: width [m] of an absorbing layer along the side "
                              "walls (default 0: closed tank)")
@@ -49,12 +50,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="body cases: body-particle pressure by Shepard extrapolation "
                              "(default) or the first-order mDBC ghost node (docs/SPH_RUNS.md)")
     parser.add_argument("--packing", choices=("lattice", "packed"), default=None,
-                        help="body cases: the fluid lattice cut by the body (default) or "
-                             "relaxed to a body-fitted packing with masses from the initial "
-                             "density (hybridwsi.sph.packing; docs/SPH_RUNS.md)")
+                        help="body cases: the fluid near the body relaxed to a body-fitted "
+                             "packing with masses from the initial density (default; "
+                             "hybridwsi.sph.packing) or the fluid lattice cut by the body (the "
+                             "runs before issue 15; docs/SPH_RUNS.md)")
     parser.add_argument("--relax", type=o.nonnegative_float, default=None, metavar="R",
                         help="decay cases: damp the fluid while the body is held and release "
-                             "once the rms fluid speed is below R·sqrt(g·depth)")
+                             "once the rms fluid speed is below R·sqrt(g·depth) (default 1e-3; "
+                             "0: an undamped hold of --hold seconds)")
     o.add_out(parser, "output TimeHistory NetCDF (default sph_<case>.nc)", metavar="HIST.nc")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")

@@ -39,17 +39,19 @@ def acoustic_period(case: tank.SPHCase) -> float:
 
 
 def held_force(dp: float, z: float, *, depth: float = 0.45, half_width: float = 0.45,
-               n_periods: float = 5.0, settle: float = 0.1, domain: str = "quarter",
-               symmetry: str = "mirror", relax: float = 0.0, **case_kw: Any
+               n_periods: float = 5.0, settle: float = 0.4, domain: str = "quarter",
+               symmetry: str = "mirror", relax: float = tank.BODY_RELAX, **case_kw: Any
                ) -> dict[str, float]:
     """Run the sphere held at z [m] and return the mean and standard deviation [N] of the
     whole body's fluid force over ``n_periods`` acoustic periods after ``settle`` [s].
 
     With ``relax`` > 0 the settling is the damped relaxation of
     :func:`hybridwsi.sph.tank.decay3d` (``relax``: the rms fluid speed that ends it, as a
-    fraction of sqrt(g depth)) and ``settle`` is its longest duration; the average starts
-    where it ends (``t_settled`` [s] in the result). ``case_kw`` go to
-    :func:`hybridwsi.sph.tank.decay3d` (e.g. ``hdx``, ``boundary``)."""
+    fraction of sqrt(g depth); default the body cases') and ``settle`` is its longest
+    duration; the average starts where it ends (``t_settled`` [s] in the result); with
+    ``relax=0`` the fluid settles undamped for ``settle``. ``case_kw`` go to
+    :func:`hybridwsi.sph.tank.decay3d` (e.g. ``hdx``, ``boundary``, ``packing``; the default
+    packing is the body cases', packed)."""
     from hybridwsi.sph.run import run_case
 
     kw = dict(dp=dp, depth=depth, half_width=half_width, free=False,
@@ -62,7 +64,7 @@ def held_force(dp: float, z: float, *, depth: float = 0.45, half_width: float = 
         t_settled = case.t_release
         f = hist["F_fluid"].values[:, 0]
     else:
-        case = tank.decay3d(tf=settle + t_avg, t_release=0.0, **kw)
+        case = tank.decay3d(tf=settle + t_avg, t_release=0.0, relax=0.0, **kw)
         hist = run_case(case, progress=False)
         t_settled = settle
         f = hist["F_fluid"].values[:, 0][hist["time"].values >= settle - 1e-9]

@@ -46,6 +46,14 @@ BODY_HDX = 1.5
 # Hold before release [s]: the lattice fluid around the body relaxes (acoustic period
 # 4 d / c0 ~ 0.1 s) while the body is held, as the experiment holds the sphere in still water.
 BODY_HOLD = 0.3
+# Initial state of the body cases: the fluid near the body packed to fit it, with consistent
+# masses (``"packed"``, :mod:`hybridwsi.sph.packing`), and the hold ended by a damped
+# relaxation once the rms fluid speed is below BODY_RELAX sqrt(g d). Measured against the
+# lattice start (``"lattice"``, the default before issue 15; docs/SPH_RUNS.md): static gate at
+# D/10 buoyancy -0.35 % of the weight instead of +1.77 %; validation-tank decay at D/10 RMS of
+# heave/H0 0.032 instead of 0.075, the first trough consistent across resolutions.
+BODY_PACKING = "packed"
+BODY_RELAX = 1e-3
 
 
 @dataclass
@@ -87,8 +95,9 @@ class SPHCase:
     #: body-particle pressure: ``"shepard"`` (Adami's extrapolation at the particle, the
     #: shipped runs) or ``"mdbc"`` (first order at the mirror node, :mod:`hybridwsi.sph.mdbc`)
     boundary: str = "shepard"
-    #: initial fluid near a body: ``"lattice"`` (the lattice cut by the body, the shipped
-    #: runs) or ``"packed"`` (:mod:`hybridwsi.sph.packing`; masses from the initial density)
+    #: initial fluid near a body: ``"packed"`` (:mod:`hybridwsi.sph.packing`; masses from the
+    #: initial density; the body cases' default) or ``"lattice"`` (the lattice cut by the
+    #: body, the runs before issue 15; the cases without a body are lattices)
     packing: str = "lattice"
     #: what the packing did (``pack_around_body``'s info), empty for ``"lattice"``
     packing_info: dict[str, float] = field(default_factory=dict)
@@ -545,7 +554,7 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                hdx: float = BODY_HDX, t_release: float = 0.0,
                smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
                symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
-               packing: str = "lattice") -> SPHCase:
+               packing: str = BODY_PACKING) -> SPHCase:
     """Half-submerged circle (2D) or sphere (3D) released from z0 [m] above equilibrium.
 
     ``domain`` (3D): ``"quarter"`` (symmetry planes x = 0 and y = 0; the default without a
@@ -570,10 +579,11 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     (``t_release`` is then the longest hold).
     ``sponge`` [m] (decay cases) is the width of an absorbing layer along the side walls, so that
     the waves the body radiates are not reflected back onto it.
-    ``packing``: ``"lattice"`` (the fluid lattice cut by the body, the shipped runs) or
-    ``"packed"`` (the fluid within a few dp of the body relaxed to a body-fitted packing,
+    ``packing``: ``"packed"`` (the public cases' default, :data:`BODY_PACKING`: the fluid
+    within a few dp of the body relaxed to a body-fitted packing,
     :func:`hybridwsi.sph.packing.pack_around_body`, and every fluid mass rho_i dp^dim from its
-    initial density: the static gate's set-up, ``docs/SPH_RUNS.md``)."""
+    initial density) or ``"lattice"`` (the fluid lattice cut by the body, the runs before
+    issue 15; ``docs/SPH_RUNS.md``)."""
     _check_boundary(boundary)
     if packing not in PACKINGS:
         raise InputError(f"packing must be one of {', '.join(PACKINGS)}, got {packing!r}")
@@ -716,7 +726,7 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, boundary: str = "shepard",
-            relax: float = 0.0, packing: str = "lattice") -> SPHCase:
+            relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
     case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
@@ -728,7 +738,7 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
                        "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
                        "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
                        "sponge": sponge}
-    _record_boundary(case, boundary, relax, packing)
+    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing)
     return case
 
 
@@ -737,8 +747,8 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
             free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
             hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
-            symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
-            packing: str = "lattice") -> SPHCase:
+            symmetry: str = "mirror", boundary: str = "shepard",
+            relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
     """Kramer et al. (2021) sphere decay (D = 0.3 m, m = 7.056 kg, drop 0.1D); walls at
     ``half_width`` [m] from the sphere's axis. ``domain`` ``"quarter"`` (default; symmetry
     planes x = 0 and y = 0), ``"half"`` (y = 0) or ``"full"``; ``symmetry`` ``"mirror"``
@@ -756,7 +766,7 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
                        "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
                        "smooth_body": smooth_body, "sponge": sponge, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary, relax, packing)
+    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing)
     return case
 
 
@@ -764,8 +774,8 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
               height: float = 0.05, half_width: float = 0.45, tf: float = 20.0,
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
               smooth_body: bool = True, gain: float = 1.0, domain: str = "half",
-              symmetry: str = "mirror", boundary: str = "shepard", packing: str = "lattice"
-              ) -> SPHCase:
+              symmetry: str = "mirror", boundary: str = "shepard",
+              packing: str = BODY_PACKING) -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
     narrow flume (``domain`` ``"half"``: symmetry plane y = 0, or ``"full"``) with a piston
     and a damping zone. ``symmetry``: ``"mirror"`` (true mirror plane) or ``"wall"`` (the
@@ -796,21 +806,21 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body, "gain": gain, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary, packing=packing)
+    _record_boundary(case, boundary, None, packing)
     return case
 
 
-def _record_boundary(case: SPHCase, boundary: str, relax: float = 0.0,
-                     packing: str = "lattice") -> None:
-    """Record a non-default body boundary, relaxation and packing in the case inputs (the
-    defaults are left out, so the inputs, checkpoints and histories of the shipped runs are
-    unchanged)."""
+def _record_boundary(case: SPHCase, boundary: str, relax: float | None,
+                     packing: str) -> None:
+    """Record the body boundary (when not the default Shepard one), the relaxation (cases
+    with a hold; 0 for a fixed hold) and the packing in the case inputs. The packing and the
+    relaxation are always recorded since their defaults changed (histories made before
+    carry neither: they are ``"lattice"`` with a fixed hold)."""
     if boundary != "shepard":
         case.inputs["boundary"] = boundary
-    if relax > 0.0:
+    if relax is not None:
         case.inputs["relax"] = relax
-    if packing != "lattice":
-        case.inputs["packing"] = packing
+    case.inputs["packing"] = packing
 
 
 def _symmetry_planes(dim: int, piston: bool, domain: str | None, symmetry: str
