@@ -22,6 +22,7 @@ import xarray as xr
 
 from hybridwsi._meta import version
 from hybridwsi.cli import Parser, run_script
+from hybridwsi.errors import InputError
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
 from hybridwsi.report.validation import (decay_convergence_table, decay_measures,
@@ -64,7 +65,10 @@ def main() -> None:
     if a.table:
         print(decay_measures_table(rows, "01D"))
     if a.gci:
-        print(decay_convergence_table({float(inputs[lb]["dp"]): rows[lb] for lb in labels}))
+        by_dp = {float(inputs[lb]["dp"]): rows[lb] for lb in labels}
+        if len(by_dp) != len(labels):
+            raise InputError("--gci needs each run at its own spacing (two runs share a dp)")
+        print(decay_convergence_table(by_dp))
     if a.png:
         from hybridwsi.report.plots import save, sph_decay_figure
 
