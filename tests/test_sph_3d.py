@@ -74,16 +74,20 @@ def test_decay_first_cycle_matches_kramer_dp_d10():
     # first cycle of the 01D decay at dp = D/10 in a small quarter tank (~5 min on one core):
     # smooth body, h/dp = 1.5, the defaults' packed start released after the damped
     # relaxation; measured -0.818 H0 at 0.386 s, crest +0.696, period from the extrema +4.0 %
-    # (docs/SPH_RUNS.md) against the experiment's -0.853 at 0.390 s and +0.630 at 0.770 s
-    # (the small tank's equilibrium rise, 0.032 H0, is in these extrema)
+    # (docs/SPH_RUNS.md, from the start level) against the experiment's -0.853 at 0.390 s and
+    # +0.630 at 0.770 s. The extrema are compared from this small tank's settled level (its
+    # analytic equilibrium rise, 0.032 H0, compare_decay's z_eq): from the start level the
+    # crest is 10.5 % high, from the settled one 5 %
     from hybridwsi.sph.decay import compare_decay
 
     case = tank.decay3d(dp=0.03, depth=0.6, half_width=0.75, tf=1.0)
     hist = run_case(case, progress=False)
-    r = compare_decay(hist, 0.1 * tank.SPHERE_D, z_eq=0.0)
+    r = compare_decay(hist, 0.1 * tank.SPHERE_D)
+    settled = r["z_eq_over_H0"]
+    assert 0.02 < settled < 0.04  # equilibrium_shift(0.03, 0.15, 2.25) / H0 = 0.032
     assert r["trough_t_sim"] == pytest.approx(r["trough_t_exp"], rel=0.03)
-    assert r["trough_sim"] == pytest.approx(r["trough_exp"], rel=0.10)
-    assert r["crest_sim"] == pytest.approx(r["crest_exp"], rel=0.10)
+    assert r["trough_sim"] - settled == pytest.approx(r["trough_exp"], rel=0.10)
+    assert r["crest_sim"] - settled == pytest.approx(r["crest_exp"], rel=0.10)
     assert abs(r["period_extrema_rel_err"]) < 0.05
 
 
