@@ -136,6 +136,25 @@ def test_cli_runs_and_rejects_bad_dp(tmp_path, capsys):
     assert "error:" in capsys.readouterr().err
 
 
+def test_cli_alpha_wall_reaches_the_case_and_is_recorded(tmp_path, capsys):
+    import json
+
+    from hybridwsi.cli import main
+    from hybridwsi.history import read_netcdf
+
+    out = tmp_path / "d.nc"
+    assert main(["sph", "decay2d", "--dp", "0.03", "--tf", "0.01", "--hold", "0",
+                 "--alpha-wall", "0.002", "--out", str(out), "--quiet"]) == 0
+    assert json.loads(read_netcdf(out).attrs["inputs"])["alpha_wall"] == 0.002
+    # the default of the decay cases: no fluid-solid artificial viscosity (tank.BODY_ALPHA_WALL)
+    assert tank.decay2d(dp=0.03, tf=0.01, t_release=0.0).alpha_wall == 0.0
+    # a case without solids to scale does not take the option
+    assert main(["sph", "hydrostatic", "--alpha-wall", "0.1", "--out",
+                 str(tmp_path / "h.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error:") == 1 and "alpha_wall" in err
+
+
 # --------------------------------------------------------------------------- smooth body, hold
 @pytest.mark.parametrize("dim", [2, 3])
 def test_round_shell_layers_are_round_and_evenly_spaced(dim):

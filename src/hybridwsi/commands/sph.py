@@ -58,6 +58,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="decay cases: damp the fluid while the body is held and release "
                              "once the rms fluid speed is below R·sqrt(g·depth) (default 1e-3; "
                              "0: an undamped hold of --hold seconds)")
+    parser.add_argument("--alpha-wall", type=o.nonnegative_float, default=None, metavar="A",
+                        help="decay cases, waves3d: artificial-viscosity coefficient between "
+                             "the fluid and the solids (body, walls); default 0 for the decay "
+                             "cases (docs/SPH_RUNS.md), the fluid's for waves3d")
     o.add_out(parser, "output TimeHistory NetCDF (default sph_<case>.nc)", metavar="HIST.nc")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")
@@ -82,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
                       t_release=args.hold, sponge=args.sponge, gain=args.gain,
                       domain=args.domain, symmetry=args.symmetry,
                       smooth_body=(False if args.lattice_body else None),
-                      boundary=args.boundary, relax=args.relax, packing=args.packing)
+                      boundary=args.boundary, relax=args.relax, packing=args.packing,
+                      alpha_wall=args.alpha_wall)
     if not args.quiet:
         print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} "
               f"s, tf = {case.tf} s -> {out}")

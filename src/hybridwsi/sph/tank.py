@@ -37,6 +37,17 @@ KRAMER_DEPTH = 0.9
 # trough was -0.37 H0 instead of the measured -0.85 and the period looked 26 % long. delta-SPH
 # density diffusion keeps alpha = 0.005 stable (checked over 1.2 s at dp = D/8 and D/10).
 BODY_ALPHA = 0.005
+# Artificial viscosity between the fluid and the solids (body and tank walls) of the decay
+# cases: none. Against a wall the viscosity nu = alpha h c0 / 10 has a Stokes layer of about
+# half a particle spacing at every resolution (0.42 dp at D/10, 0.50 dp at D/14), so the drag it
+# puts on the body, rho alpha (h/dp) c0 A U / 10, does not vanish with refinement: ~3 N s/m on
+# the sphere at alpha = 0.005, ten times the laminar skin friction of water (rho sqrt(nu w / 2)
+# A ~ 0.3 N s/m), a damping ratio of ~0.01-0.02 that no ladder removes. Without it the ladder
+# converges to the high-Reynolds-number flow of the experiment (docs/SPH_RUNS.md, "The
+# artificial viscosity at the body does not vanish with refinement"; DualSPHysics scales the
+# same term by its ViscoBoundFactor). The wave flumes keep alpha at their walls (their paddle
+# gain was calibrated so).
+BODY_ALPHA_WALL = 0.0
 # h/dp of the floating-body cases. On a lattice the Wendland quintic's gradient moment
 # sum_j V_j (x_j - x_i) dW/dx_i is 0.979 at h/dp = 1.3 (3D; 0.974 in 2D), so the fluid settles
 # with a pressure ~2 % above hydrostatic and the body floats high; it is 1.0006 at 1.5. Measured
@@ -565,7 +576,8 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     0.5 N of static force at D/8, see ``docs/SPH_RUNS.md``).
 
     ``alpha`` is the artificial-viscosity coefficient (see :data:`BODY_ALPHA`), ``alpha_wall``
-    the one between fluid and solid particles (default ``alpha``), ``hdx`` = h/dp. The body is
+    the one between fluid and solid particles (``None``: ``alpha``; the decay cases default
+    to :data:`BODY_ALPHA_WALL`, none), ``hdx`` = h/dp. The body is
     held for ``t_release`` [s] before it is released (``tf`` counts from the release).
     ``smooth_body`` builds the body from concentric particle shells (:func:`round_shell`)
     instead of the lattice points inside it, whose staircase surface acts as roughness.
@@ -723,8 +735,9 @@ def _fluid_count(n_box: int, dp: float, radius: float, z0: float, dim: int, doma
 
 def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_d: float = 0.1,
             half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
-            free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
-            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
+            free: bool = True, alpha: float = BODY_ALPHA,
+            alpha_wall: float | None = BODY_ALPHA_WALL, hdx: float = BODY_HDX,
+            t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, boundary: str = "shepard",
             relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
@@ -744,8 +757,9 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
 
 def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1.2,
             z0_over_d: float = 0.1, tf: float = 5 * 0.7561 + 0.05, c0_factor: float = 10.0,
-            free: bool = True, alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
-            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
+            free: bool = True, alpha: float = BODY_ALPHA,
+            alpha_wall: float | None = BODY_ALPHA_WALL, hdx: float = BODY_HDX,
+            t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
             symmetry: str = "mirror", boundary: str = "shepard",
             relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
