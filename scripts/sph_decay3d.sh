@@ -1,8 +1,8 @@
 #!/bin/sh
 # 3D heave decay of the Kramer et al. (2021) sphere (drop 0.1 D) on a quarter domain with mirror
 # planes, in the validation tank (depth 0.9 m, walls 1.2 m from the axis) with a 0.5 m sponge
-# along the side walls, from the body-fitted packed start released after a damped relaxation
-# (issue 15; docs/SPH_RUNS.md). dp = 0.03 m = D/10: 63 335 particles, 13 078 steps, 80 min on
+# along the side walls, from the body-fitted packed start released after a damped relaxation,
+# without artificial viscosity between fluid and body (issue 15; docs/SPH_RUNS.md). dp = 0.03 m = D/10: 63 335 particles, 13 078 steps, 80 min on
 # one core. Resumable: re-run the same command after an interruption. Then compare with the
 # experiment and the 11 published codes, and draw the figure shipped in docs/figures.
 #   DP=0.03 OUT=results/sph sh scripts/sph_decay3d.sh
