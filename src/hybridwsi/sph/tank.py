@@ -42,10 +42,10 @@ BODY_ALPHA = 0.005
 # half a particle spacing at every resolution (0.42 dp at D/10, 0.50 dp at D/14), so the drag it
 # puts on the body, rho alpha (h/dp) c0 A U / 10, does not vanish with refinement: ~3 N s/m on
 # the sphere at alpha = 0.005, ten times the laminar skin friction of water (rho sqrt(nu w / 2)
-# A ~ 0.3 N s/m), a damping ratio of ~0.01-0.02 that no ladder removes. Without it the ladder
-# converges to the high-Reynolds-number flow of the experiment (docs/SPH_RUNS.md, "The
-# artificial viscosity at the body does not vanish with refinement"; DualSPHysics scales the
-# same term by its ViscoBoundFactor). The wave flumes keep alpha at their walls (their paddle
+# A ~ 0.3 N s/m), a damping ratio of ~0.01-0.02 that no ladder removes. Without it the first
+# trough and the damping ratio approach the experiment's from D/10 to D/12 instead of leaving
+# them (docs/SPH_RUNS.md, "No artificial viscosity between the fluid and the body"; DualSPHysics
+# scales the same term by its ViscoBoundFactor). The wave flumes keep alpha at their walls (their paddle
 # gain was calibrated so).
 BODY_ALPHA_WALL = 0.0
 # h/dp of the floating-body cases. On a lattice the Wendland quintic's gradient moment
