@@ -9,7 +9,8 @@ Prints the comparison (periods, first extrema, RMS of z/H0 over 5 Te0) of each r
 With ``--table`` it also prints issue 15's measures (damped period and damping ratio fitted
 over [0, 2.5 Te0], first trough, RMS over [0, 5 Te0]) of the runs beside the experiment and the
 published codes, as a Markdown table; with ``--gci`` (three or more runs at different spacings)
-also the observed order, extrapolated value and grid convergence index of those measures.
+also the observed order, extrapolated value and grid convergence index of those measures
+and of the hold force before the release (when every run records it).
 With ``--png`` it also draws the runs over the experiment
 and saves the curves behind the figure next to it (same name, ``.nc``).
 """
@@ -25,8 +26,9 @@ from hybridwsi.cli import Parser, run_script
 from hybridwsi.errors import InputError
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.importers.kramer import read_kramer_drop
-from hybridwsi.report.validation import (decay_convergence_table, decay_measures,
-                                         decay_measures_published, decay_measures_table)
+from hybridwsi.report.validation import (CONVERGENCE_MEASURES, decay_convergence_table,
+                                         decay_measures, decay_measures_published,
+                                         decay_measures_table)
 from hybridwsi.sph.decay import TE0, compare_decay, load_experiment
 
 
@@ -61,6 +63,8 @@ def main() -> None:
         inputs[labels[-1]] = json.loads(hist.attrs.get("inputs", "{}"))
         if a.table:
             rows[labels[-1]] = decay_measures(hist["time"].values, zs, TE0, measured)
+            # the static force before the release [N], whose convergence issue 15 also asks
+            rows[labels[-1]]["hold_force"] = float(hist["F_tot"].attrs.get("hold_mean", np.nan))
     print(json.dumps(report, indent=1))
     if a.table:
         print(decay_measures_table(rows, "01D"))
@@ -68,7 +72,9 @@ def main() -> None:
         by_dp = {float(inputs[lb]["dp"]): rows[lb] for lb in labels}
         if len(by_dp) != len(labels):
             raise InputError("--gci needs each run at its own spacing (two runs share a dp)")
-        print(decay_convergence_table(by_dp))
+        held = all(np.isfinite(r["hold_force"]) for r in by_dp.values())
+        print(decay_convergence_table(
+            by_dp, CONVERGENCE_MEASURES + (("hold_force",) if held else ())))
     if a.png:
         from hybridwsi.report.plots import save, sph_decay_figure
 

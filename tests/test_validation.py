@@ -87,5 +87,12 @@ def test_decay_convergence_table_recovers_a_known_order():
         cells = [c.strip() for c in line.strip("|").split("|")]
         assert cells[0] == q and float(cells[2]) == pytest.approx(2.0, abs=0.01)
         assert float(cells[3]) == pytest.approx(limits[q], abs=5e-5) and cells[5] == "yes"
+    # an added measure (the hold force [N]) is tabulated when named
+    for dp, row in rows.items():
+        row["hold_force"] = -20.51 + 40.0 * dp ** 1.5
+    extra = decay_convergence_table(rows, CONVERGENCE_MEASURES + ("hold_force",)).splitlines()
+    cells = [c.strip() for c in extra[-1].strip("|").split("|")]
+    assert cells[0] == "hold_force" and float(cells[2]) == pytest.approx(1.5, abs=0.01)
+    assert float(cells[3]) == pytest.approx(-20.51, abs=5e-4)
     with pytest.raises(InputError, match="three spacings"):
         decay_convergence_table({0.03: rows[0.03], 0.025: rows[0.025]})

@@ -226,7 +226,8 @@ def decay_measures_table(rows: dict[str, dict[str, float]], drop: str) -> str:
 CONVERGENCE_MEASURES = ("period_d", "zeta", "trough", "rms")
 
 
-def decay_convergence_table(rows: dict[float, dict[str, float]]) -> str:
+def decay_convergence_table(rows: dict[float, dict[str, float]],
+                            measures: tuple[str, ...] = CONVERGENCE_MEASURES) -> str:
     """Observed order, extrapolated value and GCI of the :func:`decay_measures` of runs at
     three or more particle spacings (the three finest; Celik et al. 2008 via
     :func:`hybridwsi.sph.decay.grid_convergence`), as a Markdown table.
@@ -235,6 +236,9 @@ def decay_convergence_table(rows: dict[float, dict[str, float]]) -> str:
     ----------
     rows : dict
         :func:`decay_measures` results keyed by particle spacing dp [m].
+    measures : tuple of str
+        The keys of ``rows`` to tabulate (default :data:`CONVERGENCE_MEASURES`; a caller that
+        adds e.g. the hold force [N] to each row names it here).
 
     Returns
     -------
@@ -250,7 +254,7 @@ def decay_convergence_table(rows: dict[float, dict[str, float]]) -> str:
     dps = sorted(rows)[:3]
     lines = [f"| measure (dp = {', '.join(f'{d:g}' for d in dps)} m) | values | observed order | "
              "extrapolated | GCI fine | monotone |", "|---|---|---|---|---|---|"]
-    for q in CONVERGENCE_MEASURES:
+    for q in measures:
         vals = tuple(rows[d][q] for d in dps)
         g = grid_convergence(vals, tuple(dps))
         lines.append(f"| {q} | {' / '.join(f'{v:.4f}' for v in vals)} | {g['order']:.2f} | "
