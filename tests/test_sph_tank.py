@@ -153,6 +153,20 @@ def test_cli_alpha_wall_reaches_the_case_and_is_recorded(tmp_path, capsys):
                  str(tmp_path / "h.nc")]) == 2
     err = capsys.readouterr().err
     assert err.count("error:") == 1 and "alpha_wall" in err
+    # the body's own viscosity: recorded when set, refused where there is no body
+    out = tmp_path / "b.nc"
+    assert main(["sph", "decay2d", "--dp", "0.03", "--tf", "0.01", "--hold", "0",
+                 "--alpha-body", "0.001", "--out", str(out), "--quiet"]) == 0
+    inputs = json.loads(read_netcdf(out).attrs["inputs"])
+    assert inputs["alpha_body"] == 0.001 and inputs["alpha_wall"] == 0.0
+    flume = tank.regular3d(dp=0.0375, depth=0.3, tf=0.01, packing="lattice", alpha_body=0.0)
+    assert flume.alpha_body == 0.0 and flume.alpha_wall is None
+    assert flume.inputs["alpha_body"] == 0.0
+    assert "alpha_body" not in tank.regular3d(dp=0.0375, depth=0.3, tf=0.01,
+                                              packing="lattice").inputs
+    assert main(["sph", "waves3d", "--alpha-body", "0.1", "--out", str(tmp_path / "w.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error:") == 1 and "alpha_body" in err
 
 
 # --------------------------------------------------------------------------- smooth body, hold

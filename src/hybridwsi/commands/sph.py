@@ -62,6 +62,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="decay cases, waves3d: artificial-viscosity coefficient between "
                              "the fluid and the solids (body, walls); default 0 for the decay "
                              "cases (docs/SPH_RUNS.md), the fluid's for waves3d")
+    parser.add_argument("--alpha-body", type=o.nonnegative_float, default=None, metavar="A",
+                        help="body cases: artificial-viscosity coefficient between the fluid "
+                             "and the body alone (default: that of --alpha-wall; regular3d: "
+                             "the fluid's)")
     o.add_out(parser, "output TimeHistory NetCDF (default sph_<case>.nc)", metavar="HIST.nc")
     parser.add_argument("--resume", action="store_true",
                         help="continue from <out>.ckpt.npz when it exists")
@@ -87,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
                       domain=args.domain, symmetry=args.symmetry,
                       smooth_body=(False if args.lattice_body else None),
                       boundary=args.boundary, relax=args.relax, packing=args.packing,
-                      alpha_wall=args.alpha_wall)
+                      alpha_wall=args.alpha_wall, alpha_body=args.alpha_body)
     if not args.quiet:
         print(f"{case.name}: {case.n_particles} particles, dp = {case.dp} m, dt = {case.dt:.3g} "
               f"s, tf = {case.tf} s -> {out}")

@@ -109,7 +109,8 @@ class FluidRates(Equation):
     PySPH's ``ContinuityEquation``, then the density diffusion, then ``MomentumEquation`` with
     beta = 0 and no tensile correction, in that order, so the result is bitwise the same).
     One instance per source array: fluid (``delta`` > 0) and solid (``delta`` = 0: no
-    diffusion across the wall, ``alpha`` the fluid-solid viscosity):
+    diffusion across the wall, ``alpha`` the fluid-solid viscosity, ``alpha_body`` that of
+    the body's particles, flag 2, when it differs; default ``alpha``):
 
     arho_a += m_b v_ab . grad W_ab  (continuity)
              + delta h c0 sum_b 2 (rho_ab - rho_ab^H) x_ab . grad_a W_ab / |x_ab|^2 m_b / rho_b,
@@ -126,8 +127,9 @@ class FluidRates(Equation):
     """
 
     def __init__(self, dest, sources, c0, alpha, delta, rho0, gx=0.0, gy=0.0, gz=0.0,
-                 t_ramp=0.0):
+                 t_ramp=0.0, alpha_body=None):
         self.c0, self.alpha, self.delta, self.rho0 = c0, alpha, delta, rho0
+        self.alpha_body = alpha if alpha_body is None else alpha_body
         self.gx, self.gy, self.gz, self.t_ramp = gx, gy, gz, t_ramp
         super().__init__(dest, sources)
 
@@ -137,8 +139,8 @@ class FluidRates(Equation):
         d_av[d_idx] = 0.0
         d_aw[d_idx] = 0.0
 
-    def loop(self, d_idx, s_idx, d_rho, s_rho, d_p, s_p, d_cs, s_cs, s_m, d_arho, d_au, d_av,
-             d_aw, VIJ, XIJ, DWIJ, R2IJ, HIJ, EPS, RHOIJ1, t):
+    def loop(self, d_idx, s_idx, d_rho, s_rho, d_p, s_p, d_cs, s_cs, s_m, s_flag, d_arho, d_au,
+             d_av, d_aw, VIJ, XIJ, DWIJ, R2IJ, HIJ, EPS, RHOIJ1, t):
         # continuity
         vijdotdwij = DWIJ[0] * VIJ[0] + DWIJ[1] * VIJ[1] + DWIJ[2] * VIJ[2]
         d_arho[d_idx] += s_m[s_idx] * vijdotdwij
@@ -160,7 +162,12 @@ class FluidRates(Equation):
         if vijdotxij < 0:
             cij = 0.5 * (d_cs[d_idx] + s_cs[s_idx])
             muij = (HIJ * vijdotxij) / (R2IJ + EPS)
-            piij = -self.alpha * cij * muij
+            alpha = self.alpha
+            # body particles (flag 2) may take their own; no flag read when they do not
+            if self.alpha_body != self.alpha:
+                if s_flag[s_idx] > 1.5:
+                    alpha = self.alpha_body
+            piij = -alpha * cij * muij
             piij = piij * RHOIJ1
         tmp = d_p[d_idx] * rhoi21 + s_p[s_idx] * rhoj21
         d_au[d_idx] += -s_m[s_idx] * (tmp + piij) * DWIJ[0]

@@ -60,6 +60,7 @@ def make_equations(case: SPHCase) -> list:
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
     x0, x1, sigma = case.damping
     alpha_wall = case.alpha if case.alpha_wall is None else case.alpha_wall
+    alpha_body = alpha_wall if case.alpha_body is None else case.alpha_body
     return [
         Group(equations=[TaitEOS("fluid", None, rho0=case.rho0, c0=case.c0, gamma=case.gamma)],
               real=False, name="eos"),
@@ -74,7 +75,7 @@ def make_equations(case: SPHCase) -> list:
                        rho0=case.rho0, **grav),
             # fluid-solid pairs take their own viscosity and no density diffusion
             FluidRates("fluid", ["wall"], c0=case.c0, alpha=alpha_wall, delta=0.0,
-                       rho0=case.rho0, **grav),
+                       rho0=case.rho0, alpha_body=alpha_body, **grav),
             GravityRamp("fluid", None, **grav),
             HoldRelaxation("fluid", None),
             DampingZone("fluid", None, x0=x0, x1=x1, sigma_max=sigma,
@@ -82,7 +83,7 @@ def make_equations(case: SPHCase) -> list:
             # the integrator moves particles with (ax, ay, az): XSPH, or the velocity itself
             XSPHCorrection("fluid", ["fluid"], eps=case.xsph_eps) if case.xsph_eps
             else AdvectionVelocity("fluid", None),
-            WallForce("wall", ["fluid"], alpha=alpha_wall),
+            WallForce("wall", ["fluid"], alpha=alpha_body),  # on the body's particles only
         ], name="rates"),
         Group(equations=[BodyForceReduce("wall", None)], name="body"),
     ]

@@ -86,6 +86,8 @@ class SPHCase:
     alpha: float = 0.1
     #: artificial viscosity between fluid and solid particles (None: ``alpha``)
     alpha_wall: float | None = None
+    #: artificial viscosity between fluid and the body's particles (None: ``alpha_wall``'s)
+    alpha_body: float | None = None
     delta: float = 0.1
     xsph_eps: float = 0.0
     cfl: float = 0.2
@@ -562,7 +564,7 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
                damping: tuple[float, float, float] = (1e30, 2e30, 0.0),
                probes: list[tuple[float, float]] | None = None,
                alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
-               hdx: float = BODY_HDX, t_release: float = 0.0,
+               alpha_body: float | None = None, hdx: float = BODY_HDX, t_release: float = 0.0,
                smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
                symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
                packing: str = BODY_PACKING) -> SPHCase:
@@ -577,7 +579,9 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
 
     ``alpha`` is the artificial-viscosity coefficient (see :data:`BODY_ALPHA`), ``alpha_wall``
     the one between fluid and solid particles (``None``: ``alpha``; the decay cases default
-    to :data:`BODY_ALPHA_WALL`, none), ``hdx`` = h/dp. The body is
+    to :data:`BODY_ALPHA_WALL`, none), ``alpha_body`` the one between fluid and the body's
+    particles alone (``None``: ``alpha_wall``'s; so a flume can keep the viscosity its paddle
+    was calibrated with at its walls), ``hdx`` = h/dp. The body is
     held for ``t_release`` [s] before it is released (``tf`` counts from the release).
     ``smooth_body`` builds the body from concentric particle shells (:func:`round_shell`)
     instead of the lattice points inside it, whose staircase surface acts as roughness.
@@ -604,8 +608,10 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     if not (math.isfinite(t_release) and t_release >= 0.0):
         raise InputError(f"t_release must be a non-negative time in s, got {t_release!r}")
     _check_hdx(hdx)
-    if not (math.isfinite(alpha) and 0.0 <= alpha <= 1.0):
-        raise InputError(f"alpha must be in [0, 1], got {alpha!r}")
+    for label, value in (("alpha", alpha), ("alpha_wall", alpha_wall),
+                         ("alpha_body", alpha_body)):
+        if value is not None and not (math.isfinite(value) and 0.0 <= value <= 1.0):
+            raise InputError(f"{label} must be in [0, 1], got {value!r}")
     _check_dp(dp, radius)
     if not (math.isfinite(sponge) and 0.0 <= sponge <= half_width - radius - 4 * dp):
         raise InputError(f"sponge must be between 0 and the clear width {half_width - radius:.3g}"
@@ -698,7 +704,7 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
         wall.piston[3:6] = piston
     case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
                    hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
-                   output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall,
+                   output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body,
                    damping_radial=sponge > 0.0,
                    mirror=planes if symmetry == "mirror" else (), boundary=boundary,
                    packing=packing, packing_info=packing_info)
@@ -736,30 +742,30 @@ def _fluid_count(n_box: int, dp: float, radius: float, z0: float, dim: int, doma
 def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_d: float = 0.1,
             half_width: float = 1.5, tf: float = 3.0, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA,
-            alpha_wall: float | None = BODY_ALPHA_WALL, hdx: float = BODY_HDX,
-            t_release: float = BODY_HOLD,
+            alpha_wall: float | None = BODY_ALPHA_WALL, alpha_body: float | None = None,
+            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, boundary: str = "shepard",
             relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
     case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
                       half_width, tf, G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall,
-                      hdx=hdx, t_release=t_release, smooth_body=smooth_body,
+                      alpha_body=alpha_body, hdx=hdx, t_release=t_release, smooth_body=smooth_body,
                       sponge=sponge, boundary=boundary, relax=relax, packing=packing)
     case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
                        "hdx": hdx, "t_release": t_release, "smooth_body": smooth_body,
                        "sponge": sponge}
-    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing)
+    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing, alpha_body)
     return case
 
 
 def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1.2,
             z0_over_d: float = 0.1, tf: float = 5 * 0.7561 + 0.05, c0_factor: float = 10.0,
             free: bool = True, alpha: float = BODY_ALPHA,
-            alpha_wall: float | None = BODY_ALPHA_WALL, hdx: float = BODY_HDX,
-            t_release: float = BODY_HOLD,
+            alpha_wall: float | None = BODY_ALPHA_WALL, alpha_body: float | None = None,
+            hdx: float = BODY_HDX, t_release: float = BODY_HOLD,
             smooth_body: bool = True, sponge: float = 0.0, domain: str = "quarter",
             symmetry: str = "mirror", boundary: str = "shepard",
             relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
@@ -771,7 +777,8 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
     window."""
     case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
                       z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
-                      alpha=alpha, alpha_wall=alpha_wall, hdx=hdx, t_release=t_release,
+                      alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body, hdx=hdx,
+                      t_release=t_release,
                       smooth_body=smooth_body, sponge=sponge, domain=domain,
                       symmetry=symmetry, boundary=boundary, relax=relax, packing=packing)
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
@@ -780,7 +787,7 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
                        "alpha_wall": alpha_wall, "hdx": hdx, "t_release": t_release,
                        "smooth_body": smooth_body, "sponge": sponge, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing)
+    _record_boundary(case, boundary, relax if t_release > 0.0 else 0.0, packing, alpha_body)
     return case
 
 
@@ -789,7 +796,7 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
               c0_factor: float = 10.0, alpha: float = BODY_ALPHA, hdx: float = BODY_HDX,
               smooth_body: bool = True, gain: float = 1.0, domain: str = "half",
               symmetry: str = "mirror", boundary: str = "shepard",
-              packing: str = BODY_PACKING) -> SPHCase:
+              packing: str = BODY_PACKING, alpha_body: float | None = None) -> SPHCase:
     """The paper's sphere in regular waves (T = 0.75 s, H = 0.05 m), heave-free, in a
     narrow flume (``domain`` ``"half"``: symmetry plane y = 0, or ``"full"``) with a piston
     and a damping zone. ``symmetry``: ``"mirror"`` (true mirror plane) or ``"wall"`` (the
@@ -800,7 +807,9 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
     laboratory, the stroke is calibrated in the empty flume (:func:`waves3d`,
     ``scripts/sph_wave_calibration.py``) to give the target height at the body. Probes:
     one wavelength upstream of the body on the centre plane, and half a wavelength upstream
-    halfway to the side wall."""
+    halfway to the side wall. ``alpha_body``: the artificial viscosity between the fluid and
+    the body (default ``alpha``, as at the walls and the paddle, whose gain was calibrated
+    with it)."""
     g = KRAMER_G
     _check_gain(gain)
     k = wavemaker.wavenumber(period, depth, g)
@@ -813,25 +822,29 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
                       tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
                       length=length, x_body=x_body,
                       damping=(length - lam, length, 3.0 * 2 * math.pi / period),
-                      probes=probes, alpha=alpha, hdx=hdx, smooth_body=smooth_body,
+                      probes=probes, alpha=alpha, alpha_body=alpha_body, hdx=hdx,
+                      smooth_body=smooth_body,
                       domain=domain, symmetry=symmetry, boundary=boundary, packing=packing)
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,
                        "smooth_body": smooth_body, "gain": gain, "domain": domain,
                        "symmetry": symmetry}
-    _record_boundary(case, boundary, None, packing)
+    _record_boundary(case, boundary, None, packing, alpha_body)
     return case
 
 
 def _record_boundary(case: SPHCase, boundary: str, relax: float | None,
-                     packing: str) -> None:
-    """Record the body boundary (when not the default Shepard one), the relaxation (cases
+                     packing: str, alpha_body: float | None = None) -> None:
+    """Record the body boundary (when not the default Shepard one; the body's own artificial
+    viscosity when set), the relaxation (cases
     with a hold; 0 for a fixed hold) and the packing in the case inputs. The packing and the
     relaxation are always recorded since their defaults changed (histories made before
     carry neither: they are ``"lattice"`` with a fixed hold)."""
     if boundary != "shepard":
         case.inputs["boundary"] = boundary
+    if alpha_body is not None:
+        case.inputs["alpha_body"] = alpha_body
     if relax is not None:
         case.inputs["relax"] = relax
     case.inputs["packing"] = packing
