@@ -441,6 +441,9 @@ BAD_OPTIONS: dict[str, list[str]] = {
     "sph-hold-neg": ["sph", "decay2d", "--hold", "-1", "--out", "{out}/s.nc"],
     "sph-out-dev-full": ["sph", "hydrostatic", "--out", "/dev/full"],
     "sph-out-directory": ["sph", "hydrostatic", "--out", "directory.csv"],
+    "sph-alpha-body-neg": ["sph", "decay2d", "--alpha-body", "-0.1", "--out", "{out}/s.nc"],
+    "sph-alpha-body-above-one": ["sph", "decay2d", "--alpha-body", "2", "--out", "{out}/s.nc"],
+    "sph-alpha-wall-above-one": ["sph", "decay3d", "--alpha-wall", "1.5", "--out", "{out}/s.nc"],
 }
 
 def cases(bad_files: list[str]) -> list[Case]:
