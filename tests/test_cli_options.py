@@ -233,6 +233,48 @@ def test_python_dash_m(module, tmp_path):
     assert proc.returncode == 0 and proc.stdout.startswith("hybridwsi "), proc.stderr
 
 
+
+# ------------------------------------------------------------------------ SIGTERM
+_TERMINATED_JOB = """
+import os, signal, sys, time
+from hybridwsi.cli import run_script
+
+def main():
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(60)  # the signal arrives here; SIGTERM's default would kill without cleanup
+    finally:
+        open(sys.argv[1], "w").write("checkpoint")  # what a long run does on KeyboardInterrupt
+    return 0
+
+run_script(main)
+"""
+
+
+def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
+    """kill / a batch scheduler's SIGTERM: the run's cleanup (its checkpoint) is written, one
+    error line, exit status 143; a background job of a script ignores SIGINT, not SIGTERM."""
+    marker = tmp_path / "ckpt"
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    proc = subprocess.run([sys.executable, "-c", _TERMINATED_JOB, str(marker)],
+                          capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == cli.EXIT_TERMINATED, proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        "error: terminated (partial results were not written; re-run to resume)"]
+    assert marker.read_text() == "checkpoint"
+
+
+def test_sigterm_handler_is_restored_after_a_command():
+    import signal
+
+    before = signal.getsignal(signal.SIGTERM)
+    seen = []
+    args = argparse.Namespace(_run=lambda a: seen.append(signal.getsignal(signal.SIGTERM)))
+    assert cli._run(args) == 0
+    assert signal.getsignal(signal.SIGTERM) is before
+    if before == signal.SIG_DFL:  # installed while the command ran
+        assert seen == [cli._raise_terminated]
+
 def test_select_dofs_keeps_units_per_dof():
     import numpy as np
 

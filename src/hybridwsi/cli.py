@@ -16,11 +16,13 @@ and a missing optional dependency (the message names the extra to install).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import importlib.util
+import signal
 import sys
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import NoReturn
 
 from hybridwsi.commands._options import missing_dependency, one_line
@@ -42,6 +44,38 @@ COMMANDS: dict[str, str] = {
 
 #: exit status of every error the user can fix (bad input, bad option, missing extra)
 EXIT_ERROR = 2
+#: exit statuses of a run stopped by Ctrl-C (SIGINT) and by SIGTERM (kill, batch schedulers)
+EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received: stop as for Ctrl-C (long runs write their checkpoint first)."""
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _stop_on_sigterm() -> Iterator[None]:
+    """While the command runs, turn SIGTERM into :class:`Terminated` (then restore it).
+
+    A job started in the background by a non-interactive shell (``nohup ... &``) ignores
+    Ctrl-C's SIGINT, and ``kill`` and batch schedulers send SIGTERM, whose default is to die
+    on the spot, losing the progress since the last checkpoint. Left alone when someone else
+    already handles SIGTERM, or off the main thread (where no handler can be set).
+    """
+    try:
+        previous = signal.getsignal(signal.SIGTERM)
+        if previous == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:
+        previous = None
+    try:
+        yield
+    finally:
+        if previous == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def print_error(message: str) -> None:
@@ -96,7 +130,7 @@ def _run(args: argparse.Namespace) -> int:
     each; when the command fails, only its error line is printed.
     """
     try:
-        with warnings.catch_warnings(record=True) as caught:
+        with _stop_on_sigterm(), warnings.catch_warnings(record=True) as caught:
             status = int(args._run(args) or 0)
         for w in caught:  # re-issued, so that callers of main() still see them as warnings
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -113,9 +147,10 @@ def _run(args: argparse.Namespace) -> int:
         print_error(f"{exc.strerror or exc}{where}")
     except MemoryError:
         print_error("out of memory: reduce the problem size (time steps, panels, cases)")
-    except KeyboardInterrupt:
-        print_error("interrupted (partial results were not written; re-run to resume)")
-        return 130
+    except KeyboardInterrupt as exc:
+        what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print_error(f"{what} (partial results were not written; re-run to resume)")
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     return EXIT_ERROR
 
 
