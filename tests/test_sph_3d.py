@@ -134,6 +134,10 @@ def test_case_file_rebuilds_the_shipped_sph_history_set_up():
     # the set-up of issue 15: mirror plane y = 0 and the packed start, recorded in the history
     assert rec["symmetry"] == case.inputs["symmetry"] == "mirror"
     assert rec["packing"] == case.inputs["packing"] == "packed"
+    # no artificial viscosity at the body, as in the validated decays; the walls and the paddle
+    # keep theirs (the paddle gain was calibrated with it)
+    assert rec["alpha_body"] == case.inputs["alpha_body"] == 0.0
+    assert rec["alpha"] == case.inputs["alpha"] > 0.0
     assert case.n_particles == rec["n_particles"]
     assert case.h == pytest.approx(rec["h"]) and case.dt == pytest.approx(rec["dt"])
     assert case.inputs["stroke"] == pytest.approx(rec["stroke"])  # the calibrated gain too
