@@ -233,7 +233,6 @@ def test_python_dash_m(module, tmp_path):
     assert proc.returncode == 0 and proc.stdout.startswith("hybridwsi "), proc.stderr
 
 
-
 # ------------------------------------------------------------------------ SIGTERM
 _TERMINATED_JOB = """
 import os, signal, sys, time
