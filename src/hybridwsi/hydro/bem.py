@@ -251,7 +251,7 @@ def plan(
         for key, value in body.mesh_description(**low_mesh).items():
             if key != "kind":  # e.g. the sphere's "low_kh_resolution"
                 config["solver"][f"low_kh_{key}"] = value
-    input_hash = _sha256({**config, "omega": omega.tolist(), "include_inf": include_inf,
+    input_hash = _sha256({**config, "omega": hashed_frequencies(omega), "include_inf": include_inf,
                           "include_zero": include_zero})
     return Plan(body=body, omega=omega, depth=depth, dofs=dofs, directions=directions,
                 mesh=mesh, low_kh_mesh=low_mesh, method=method, symmetric=symmetric, lid=lid,
@@ -463,6 +463,15 @@ def _configuration(body: Body, depth, dofs, directions, mesh: dict, method, symm
         "solver": {"method": method, "green_function": "Delhommeau", "low_kh": low_kh},
         "versions": provenance("capytaine"),
     }
+
+
+def hashed_frequencies(omega: np.ndarray) -> list[float]:
+    """The frequencies [rad/s] as the input hash sees them: 10 significant digits.
+
+    ``np.geomspace`` differs in the last bit between CPUs (NumPy's SIMD ``log``/``exp``: 28 of
+    the paper's 400 frequencies on an AMD EPYC against the machine that shipped the files), and
+    a bit-exact key then misses the shipped coefficients and re-solves them."""
+    return [float(f"{w:.10g}") for w in np.asarray(omega, dtype=float)]
 
 
 def _sha256(obj: Any) -> str:
