@@ -29,11 +29,13 @@ width Δω over ``omega_range``), amplitudes ``a_j = sqrt(2 S(ω_j) Δω)`` and 
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.fft
 import scipy.integrate
 import scipy.optimize
 import xarray as xr
@@ -275,6 +277,87 @@ class PiersonMoskowitz(JONSWAP):
                          omega_range=omega_range, direction=direction)
 
 
+class ElevationRecord(Wave):
+    """A recorded wave elevation η(t) at the body's reference point, as a wave.
+
+    Its components are the discrete Fourier transform of the record, mean removed and padded
+    with zeros to ``pad`` times its length (``scipy.fft.next_fast_len``): the excitation force
+    ``F_exc = Re[Σ_j c_j F_e(ω_j) e^{-iω_j t}]`` (:func:`excitation_force`) is then the
+    convolution of the record with the excitation impulse response (non-causal: the force
+    at t feels the elevation before and after t), evaluated at any time, the solver's half
+    steps included. The padding makes that convolution linear instead of circular (the end of
+    the record does not wrap onto its start), exactly for impulse responses shorter than
+    ``(pad - 1)`` record lengths; the record is taken as calm before its first and after its
+    last sample, so the force within one impulse-response length of either end feels the
+    missing sea (ramp the start; leave the end out of comparisons: tests/test_wave_elevation.py
+    measures it).
+
+    Parameters
+    ----------
+    time : array, shape (n,)
+        Sample times [s], uniform (the first sample becomes t = 0 of the wave).
+    eta : array, shape (n,)
+        Elevation [m] at the reference point.
+    band : (float, float), optional
+        Frequencies kept [rad/s] (those of the BEM coefficients); None: all but the mean and
+        the Nyquist bin. :attr:`variance_outside` is the share of η's variance left out.
+    pad : float
+        Padded length over the record length (>= 2 for a linear convolution).
+    source : str
+        Where the record came from (recorded by :meth:`to_dict`).
+    direction : float
+        Propagation direction [rad] of the excitation transfer function used.
+    """
+
+    def __init__(self, time: Any, eta: Any, *, band: tuple[float, float] | None = None,
+                 pad: float = 2.0, source: str = "", direction: float = 0.0) -> None:
+        t = np.asarray(time, dtype=float)
+        x = np.asarray(eta, dtype=float)
+        if t.ndim != 1 or x.shape != t.shape or t.size < 8:
+            raise InputError("a wave-elevation record needs matching 1-D time and eta with "
+                             ">= 8 samples")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+            raise InputError("the wave-elevation record holds NaN or inf")
+        dt = _uniform_step(t)
+        if dt is None:
+            raise InputError("the wave-elevation record's time is not uniformly sampled "
+                             "(resample it first)")
+        if not pad >= 1.0:
+            raise InputError(f"pad must be >= 1, got {pad}")
+        self.dt, self.t0, self.n = float(dt), float(t[0]), int(t.size)
+        self.duration = self.dt * (self.n - 1)
+        self.source, self.direction = source, float(direction)
+        self.mean = float(np.mean(x))
+        m = scipy.fft.next_fast_len(int(math.ceil(pad * self.n)), real=True)
+        spectrum = np.fft.rfft(x - self.mean, n=m)
+        omega = 2.0 * np.pi * np.arange(spectrum.size) / (m * self.dt)
+        inner = np.arange(spectrum.size) > 0
+        if m % 2 == 0:
+            inner[-1] = False  # the Nyquist bin has no phase; never kept
+        keep = inner.copy()
+        if band is not None:
+            lo, hi = (float(b) for b in band)
+            keep &= (omega >= lo * (1 - 1e-12)) & (omega <= hi * (1 + 1e-12))
+        # η_k = Re Σ_j c_j e^{-iω_j t_k} with c_j = 2 conj(X_j) / m (rfft: Σ η e^{-iωt})
+        c = 2.0 * np.conj(spectrum) / m
+        power = np.abs(c) ** 2
+        total = power[inner].sum()
+        self.variance_outside = float(power[inner & ~keep].sum() / total) if total > 0 else 0.0
+        self.band = None if band is None else (float(band[0]), float(band[1]))
+        self.sha256 = hashlib.sha256(np.ascontiguousarray(np.column_stack([t, x])).tobytes()
+                                     ).hexdigest()
+        self._components = WaveComponents(np.abs(c[keep]), omega[keep], -np.angle(c[keep]))
+
+    def components(self) -> WaveComponents:
+        return self._components
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": "elevation_record", "source": self.source, "sha256": self.sha256,
+                "n_samples": self.n, "dt": self.dt, "t0": self.t0, "mean": self.mean,
+                "band": self.band, "variance_outside_band": self.variance_outside,
+                "n_components": int(self._components.omega.size), "direction": self.direction}
+
+
 def wave_from_dict(d: dict[str, Any]) -> Wave:
     """Rebuild a wave from :meth:`Wave.to_dict` output."""
     d = dict(d)
@@ -287,6 +370,9 @@ def wave_from_dict(d: dict[str, Any]) -> Wave:
         if kind == "piersonmoskowitz":
             d.pop("gamma", None)
             return PiersonMoskowitz(**d)
+        if kind == "elevation_record":
+            raise InputError("a wave-elevation record is not stored in its description; "
+                             "read the record again (hybridwsi simulate --wave-elevation)")
     except TypeError as exc:
         raise InputError(f"bad wave description: {exc}") from None
     raise InputError(f"unknown wave type '{kind}' (regular, jonswap, piersonmoskowitz)")

@@ -1,24 +1,33 @@
-"""The project's cases as data (TOML files beside this module).
+"""The project's cases as data: TOML files, built in (beside this module) or the user's own.
 
-``load_case("paper_sphere")`` returns the dict of ``paper_sphere.toml``: the floating sphere of
-the paper, its BEM configuration, the regular-wave case (T = 0.75 s, H = 0.05 m) and the paper's
-Table 1 values; ``load_case("kramer2021_decay")`` the decay experiment of Kramer et al. (2021);
-``load_case("oc3_hywind")`` the OC3-Hywind spar with the NREL 5-MW turbine (docs/OC3_HYWIND.md).
+``load_case("paper_sphere")`` returns the validated content of ``paper_sphere.toml``: the
+floating sphere of the paper, its BEM configuration, the regular-wave case (T = 0.75 s,
+H = 0.05 m) and the paper's Table 1 values; ``load_case("kramer2021_decay")`` the decay
+experiment of Kramer et al. (2021); ``load_case("oc3_hywind")`` the OC3-Hywind spar with the
+NREL 5-MW turbine (docs/OC3_HYWIND.md); ``load_case("path/to/my_spar.toml")`` a user's case
+file. Every case is checked against one schema (:mod:`hybridwsi.cases.schema`,
+docs/CASES.md); paths inside a case file are relative to it.
 
-From a case dict, :func:`body_from_case` builds its floating body and :func:`bem_arguments`
+From a case, :func:`body_from_case` builds its floating body and :func:`bem_arguments`
 the keyword arguments of :func:`hybridwsi.hydro.bem.compute` (``[bem]`` or ``[bem_quick]``).
+The force components of a case are built above the force layer, in
+:mod:`hybridwsi.casemodel`; this package is data only.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import sys
 from collections.abc import Mapping
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from hybridwsi.bodies import FloatingSphere, body_from_dict
+from hybridwsi.cases.schema import MOORING_MODELS, canonical_hash, validate
 from hybridwsi.errors import InputError
 
 if sys.version_info >= (3, 11):
@@ -28,7 +37,39 @@ else:  # Python 3.10: the same parser, published as tomli (pyproject.toml depend
 
 #: keys of a case's ``[bem]`` table passed to :func:`hybridwsi.hydro.bem.compute` unchanged
 BEM_KEYS = ("water_depth", "panel_size", "n_panels", "dofs", "method", "deep_water_kh",
-            "low_kh", "low_kh_panels")
+            "low_kh", "low_kh_panels", "wave_directions")
+
+
+class Case(dict):
+    """A validated case: its content as plain values (:func:`load_case`), plus where it came
+    from.
+
+    Attributes
+    ----------
+    name : str
+        The ``name`` entry, else the file name without ``.toml``.
+    path : Path or None
+        The case file (None for a case built from a dict without a file).
+    directory : Path
+        The folder relative paths in the case are taken from.
+    sha256 : str
+        Canonical content hash (:func:`hybridwsi.cases.schema.canonical_hash`): the same for
+        a copy under another name or folder, different for any change of a value or of a
+        referenced file. Computed once, at loading; edit a copy with :func:`from_dict`.
+    """
+
+    def __init__(self, data: Mapping[str, Any], *, name: str, path: Path | None,
+                 directory: Path, sha256: str) -> None:
+        super().__init__(data)
+        self.name = name
+        self.path = path
+        self.directory = directory
+        self.sha256 = sha256
+
+    @property
+    def label(self) -> str:
+        """How messages name the case: its file, else its name."""
+        return str(self.path) if self.path is not None else f"case {self.name!r}"
 
 
 def available() -> list[str]:
@@ -37,12 +78,79 @@ def available() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
 
 
-def load_case(name: str) -> dict[str, Any]:
-    """Load a built-in case by name (see :func:`available`)."""
-    path = resources.files(__name__) / f"{name}.toml"
-    if not path.is_file():
-        raise InputError(f"unknown case '{name}' (available: {', '.join(available())})")
-    return tomllib.loads(path.read_text())
+def _builtin(name: str) -> Path | None:
+    path = Path(str(resources.files(__name__))) / f"{name}.toml"
+    return path if path.is_file() and os.sep not in name and "/" not in name else None
+
+
+def case_path(case: str | os.PathLike) -> Path:
+    """The file of a case given as a built-in name or a path to a TOML file."""
+    text = os.fspath(case)
+    builtin = _builtin(text) if not text.endswith(".toml") else None
+    if builtin is not None:
+        return builtin
+    path = Path(text).expanduser()
+    if path.is_file():
+        return path
+    if text.endswith(".toml") or os.sep in text or "/" in text:
+        raise InputError(f"case file {text} not found")
+    raise InputError(f"unknown case '{text}': not a built-in case ({', '.join(available())}) "
+                     "and no such file")
+
+
+def load_case(case: str | os.PathLike) -> Case:
+    """A case by built-in name (see :func:`available`) or path to a TOML file, validated.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the key: not found, not TOML, unknown key, missing or
+        malformed value, wrong unit (:mod:`hybridwsi.cases.schema`).
+    """
+    if isinstance(case, Case):
+        return case
+    path = case_path(case)
+    label = path.name if path.parent == Path(str(resources.files(__name__))) else str(case)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise InputError(f"{label}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{label}: not a UTF-8 text file (a case is a TOML file)") from None
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{label}: not valid TOML: {exc}") from None
+    return from_dict(raw, label=label, path=path.resolve())
+
+
+def from_dict(raw: Mapping[str, Any], *, label: str = "case",
+              path: str | os.PathLike | None = None,
+              directory: str | os.PathLike | None = None) -> Case:
+    """A case from its TOML content as a dict (validated like a file; relative paths from
+    ``directory``, default the folder of ``path``, else the working directory)."""
+    path = None if path is None else Path(path)
+    folder = Path(directory) if directory is not None else (
+        path.parent if path is not None else Path.cwd())
+    content, files = validate(raw, label, folder)
+    name = content.get("name") or (path.stem if path is not None else label)
+    return Case(content, name=str(name), path=path, directory=folder,
+                sha256=canonical_hash(content, files))
+
+
+def mooring_model(case: Mapping[str, Any], override: str | None = None) -> str:
+    """The case's mooring model (``[forces] mooring``: moordyn, quasi-static, table or none),
+    or ``override`` (the command line's ``--mooring``) when given; an override needs the
+    case's ``[mooring]`` table."""
+    model = case.get("forces", {}).get("mooring", "table" if "mooring" in case else "none")
+    if override is None:
+        return model
+    if override not in MOORING_MODELS:
+        raise InputError(f"mooring model must be one of {', '.join(MOORING_MODELS)}, got "
+                         f"{override!r}")
+    if "mooring" not in case:
+        raise InputError(f"--mooring {override}: the case has no [mooring] table")
+    return override
 
 
 # ---------------------------------------------------------------------------- case -> body
@@ -51,8 +159,8 @@ def body_from_case(case: Mapping[str, Any]):
 
     Two forms:
 
-    - no ``type``: the keyword arguments of :class:`~hybridwsi.bodies.FloatingSphere`
-      (``paper_sphere.toml``);
+    - ``type = "sphere"`` (or no ``type``): the keyword arguments of
+      :class:`~hybridwsi.bodies.FloatingSphere` (``paper_sphere.toml``);
     - a ``type`` (:func:`hybridwsi.bodies.body_from_dict`; e.g. ``"rigid_assembly"`` with a
       ``[body.hull]`` table of ``type = "axisymmetric"`` and a ``profile``, ``[[body.items]]``
       with ``name``, ``mass`` [kg], ``cm`` [m], ``inertia`` [kg m^2] about the item's CM, and a
@@ -68,17 +176,16 @@ def body_from_case(case: Mapping[str, Any]):
     InputError
         A missing or malformed entry.
     """
-    from hybridwsi.bodies import FloatingSphere, body_from_dict
-
     spec = case.get("body") if isinstance(case, Mapping) else None
     if not isinstance(spec, Mapping):
         raise InputError("case has no [body] table")
-    if "type" not in spec:
-        try:
-            return FloatingSphere(**spec)
-        except TypeError as exc:
-            raise InputError(f"[body] without a type is a FloatingSphere: {exc}") from None
     env = case.get("environment", {})
+    if spec.get("type", "sphere") == "sphere":
+        try:
+            return FloatingSphere(**_with_water({k: v for k, v in spec.items() if k != "type"},
+                                                env))
+        except TypeError as exc:
+            raise InputError(f"[body] of type sphere: {exc}") from None
     spec = {**spec, "name": spec.get("name", case.get("name"))}
     if "hull" in spec:
         spec["hull"], spec["items"] = _hull_and_items(spec["hull"], spec.get("items", []), env)
@@ -98,6 +205,8 @@ def _hull_and_items(hull: Any, items: Any, env: Mapping[str, Any]
     if not isinstance(hull, Mapping) or not isinstance(items, list):
         raise InputError("[body.hull] must be a table and [[body.items]] a list of tables")
     hull = _with_water(hull, env)
+    if hull.get("type") == "sphere":
+        hull["type"] = "FloatingSphere"
     structure = hull.pop("structure", None)
     if structure is None:
         return hull, list(items)
