@@ -16,7 +16,7 @@ pytest.importorskip("zarr")
 pytest.importorskip("moorpy")
 
 from hybridwsi import cummins, sweep
-from hybridwsi.cases import load_case
+from hybridwsi.cases import from_dict, load_case, raw_case
 from hybridwsi.hydro.bem import case_coefficients
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
@@ -54,6 +54,8 @@ def test_case_configuration_comes_from_the_case(config):
         SweepConfig(dofs=("Surge",)).check()
     with pytest.raises(InputError, match="unknown case"):
         SweepConfig.for_case("no_such_case")
+    with pytest.raises(InputError, match="needs a case"):
+        SweepConfig(mooring="table").check()
 
 
 def test_sphere_settings_are_those_of_before_cases():
@@ -73,15 +75,19 @@ def test_settings_include_the_case_and_its_forces(config, shared):
     names = " ".join(current["forces"])
     for part in ("mooring(3 lines", "morison_drag(Cd 0.6", "linear_damping", "parked_rotor"):
         assert part in names
-    assert current["mooring_table"] == shared["_mooring_table"].dataset.attrs["input_hash"]
-    assert current["coeffs_hash"] == shared["_coeffs"].attrs["input_hash"]
+    model = shared["_model"]
+    assert current["mooring_table"] == model.mooring_table.dataset.attrs["input_hash"]
+    assert current["coeffs_hash"] == model.coeffs.attrs["input_hash"]
+    assert current["case_sha256"] == load_case("oc3_hywind").sha256
+    assert current["models"]["mooring"] == "table"
     base = sweep._digest(current)
     # a sea option, the drag's wave kinematics and the case's content all change the set-up
     for changed in (replace(config, gamma=2.0), replace(config, wave_kinematics=False)):
         assert sweep._digest(sweep.settings(changed, shared=shared)) != base
-    heavier_drag = load_case("oc3_hywind")
-    heavier_drag["hydrodynamics"]["drag_cd"] = 1.0
-    other = sweep.settings(config, shared={**shared, "_case": heavier_drag})
+    raw = raw_case("oc3_hywind")
+    raw["hydrodynamics"]["drag_cd"] = 1.0
+    heavier_drag = replace(model, case=from_dict(raw))
+    other = sweep.settings(config, shared={"_model": heavier_drag})
     assert other["case_sha256"] != current["case_sha256"]
     assert other["forces"] != current["forces"] and sweep._digest(other) != base
     # what is shipped to every worker: the coefficients, the state space and the table
@@ -108,7 +114,7 @@ def test_case_sweep_resumed_equals_uninterrupted(tmp_path, config, monkeypatch):
     setup = sweep.case_setup
 
     def once(cfg: SweepConfig) -> dict:
-        key = (cfg.case, cfg.coeffs, cfg.dofs, cfg.dt)
+        key = (cfg.case, cfg.coeffs, cfg.dofs, cfg.dt, cfg.mooring)
         if key not in built:
             built[key] = setup(cfg)
         return built[key]

@@ -214,6 +214,23 @@ def linear_components(case: Case, dofs: Sequence[str], *, stiffness: np.ndarray 
     return out
 
 
+def elevation_wave(coeffs: xr.Dataset, path: str | os.PathLike, column: str | None = None,
+                   direction: float = 0.0) -> ElevationRecord:
+    """A wave-elevation record file (:func:`hybridwsi.importers.read_elevation`) as the wave
+    of a run: its Fourier components inside the coefficients' frequencies. Refused when more
+    than :data:`MAX_VARIANCE_OUTSIDE` of η's variance lies outside them."""
+    t, eta, source = read_elevation(path, column)
+    omega = np.asarray(coeffs["omega"].values, dtype=float)
+    wave = ElevationRecord(t, eta, band=(float(omega.min()), float(omega.max())),
+                           source=source, direction=direction)
+    if wave.variance_outside > MAX_VARIANCE_OUTSIDE:
+        raise InputError(
+            f"{source}: {wave.variance_outside:.1%} of the wave elevation's variance lies "
+            f"outside the coefficients' frequencies {omega.min():.4g}-{omega.max():.4g} "
+            "rad/s; low-pass filter the record or compute coefficients over a wider range")
+    return wave
+
+
 def _force_variable(comp: KnownComponent, name: str, hist: xr.Dataset) -> tuple:
     dofs = [str(d) for d in hist["dof"].values]
     values = np.asarray(comp.force(hist), dtype=float)
@@ -360,26 +377,11 @@ class CaseModel:
                 "mooring_table": None if self.mooring_table is None
                 else self.mooring_table.dataset.attrs.get("input_hash")}
 
-    def elevation_wave(self, path: str | os.PathLike, column: str | None = None,
-                       direction: float = 0.0) -> ElevationRecord:
-        """A wave-elevation record file (:func:`hybridwsi.importers.read_elevation`) as the
-        wave of a run: its Fourier components inside the coefficients' frequencies. Refused
-        when more than :data:`MAX_VARIANCE_OUTSIDE` of η's variance lies outside them."""
-        t, eta, source = read_elevation(path, column)
-        omega = np.asarray(self.coeffs["omega"].values, dtype=float)
-        wave = ElevationRecord(t, eta, band=(float(omega.min()), float(omega.max())),
-                               source=source, direction=direction)
-        if wave.variance_outside > MAX_VARIANCE_OUTSIDE:
-            raise InputError(
-                f"{source}: {wave.variance_outside:.1%} of the wave elevation's variance lies "
-                f"outside the coefficients' frequencies {omega.min():.4g}-{omega.max():.4g} "
-                "rad/s; low-pass filter the record or compute coefficients over a wider range")
-        return wave
-
     def simulate(self, *, duration: float, dt: float, wave: Wave | None = None,
                  z0: float | Sequence[float] = 0.0, zdot0: float | Sequence[float] = 0.0,
-                 ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False
-                 ) -> xr.Dataset:
+                 ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False,
+                 external_force: KnownComponent | None = None, radiation: str | None = None,
+                 hydrostatics: str | None = None) -> xr.Dataset:
         """One Cummins run of the case → TimeHistory with every component recorded.
 
         Parameters
@@ -387,13 +389,19 @@ class CaseModel:
         duration, dt : float
             Simulated time and step [s].
         wave : Wave, optional
-            Regular, JONSWAP or a recorded elevation (:meth:`elevation_wave`).
+            Regular, JONSWAP or a recorded elevation (:func:`elevation_wave`).
         z0, zdot0 : float or sequence
             Initial displacement [m, rad] and velocity per DOF (a decay).
         ramp : float
             Half-cosine ramp [s] of the excitation and of the drag's wave velocity.
         wave_kinematics : bool
             The Morison drag sees the wave particle velocity.
+        external_force : KnownComponent, optional
+            A force table given besides the case (recorded as ``F_external``; not with a case
+            that has its own ``[external_force]``).
+        radiation, hydrostatics : str, optional
+            Instead of the case's ``[forces]`` models (``statespace``/``convolution``/``none``;
+            ``linear``/``nonlinear``).
 
         Returns
         -------
@@ -401,11 +409,19 @@ class CaseModel:
             :func:`hybridwsi.cummins.simulate`'s history plus :func:`record_components`;
             ``attrs["case"]``: the case's name, file, content hash and models.
         """
-        forces = self.case["forces"]
+        forces = {**self.case["forces"], "mooring": self.mooring,
+                  **({"radiation": radiation} if radiation else {}),
+                  **({"hydrostatics": hydrostatics} if hydrostatics else {})}
         comps = self.components(wave=wave if wave_kinematics else None, ramp=ramp, dt=dt)
+        if external_force is not None:
+            if "external_force" in comps:
+                raise InputError(f"{self.case.label} has its own [external_force]; give one "
+                                 "force table, not two")
+            comps["external_force"] = external_force
         nonlinear = forces["hydrostatics"] == "nonlinear"
         excite = wave if forces["excitation"] else None
-        ss = self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt) else None
+        ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
+              and forces["radiation"] == "statespace" else None)
         hist = cummins.simulate(
             self.coeffs, dofs=self.dofs, duration=duration, dt=dt, wave=excite, z0=z0,
             zdot0=zdot0, forces=list(comps.values()), radiation=forces["radiation"],
@@ -419,6 +435,5 @@ class CaseModel:
         hist.attrs["case"] = json.dumps({
             "name": self.case.name, "file": None if self.case.path is None
             else str(self.case.path), "sha256": self.case.sha256,
-            "models": {**forces, "mooring": self.mooring},
-            "wave_kinematics": bool(wave_kinematics and wave is not None)})
+            "models": forces, "wave_kinematics": bool(wave_kinematics and wave is not None)})
         return hist

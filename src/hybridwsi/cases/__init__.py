@@ -83,6 +83,12 @@ def _builtin(name: str) -> Path | None:
     return path if path.is_file() and os.sep not in name and "/" not in name else None
 
 
+def is_builtin(case: str | os.PathLike) -> bool:
+    """Whether ``case`` names a built-in case (not a file)."""
+    text = os.fspath(case)
+    return not text.endswith(".toml") and _builtin(text) is not None
+
+
 def case_path(case: str | os.PathLike) -> Path:
     """The file of a case given as a built-in name or a path to a TOML file."""
     text = os.fspath(case)
@@ -98,6 +104,27 @@ def case_path(case: str | os.PathLike) -> Path:
                      "and no such file")
 
 
+def _label(case: str | os.PathLike, path: Path) -> str:
+    return path.name if path.parent == Path(str(resources.files(__name__))) else os.fspath(case)
+
+
+def raw_case(case: str | os.PathLike) -> dict[str, Any]:
+    """The TOML content of a case file as written (not validated): to edit and check again
+    with :func:`from_dict`."""
+    path = case_path(case)
+    label = _label(case, path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise InputError(f"{label}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{label}: not a UTF-8 text file (a case is a TOML file)") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{label}: not valid TOML: {exc}") from None
+
+
 def load_case(case: str | os.PathLike) -> Case:
     """A case by built-in name (see :func:`available`) or path to a TOML file, validated.
 
@@ -110,18 +137,7 @@ def load_case(case: str | os.PathLike) -> Case:
     if isinstance(case, Case):
         return case
     path = case_path(case)
-    label = path.name if path.parent == Path(str(resources.files(__name__))) else str(case)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise InputError(f"{label}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{label}: not a UTF-8 text file (a case is a TOML file)") from None
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{label}: not valid TOML: {exc}") from None
-    return from_dict(raw, label=label, path=path.resolve())
+    return from_dict(raw_case(case), label=_label(case, path), path=path.resolve())
 
 
 def from_dict(raw: Mapping[str, Any], *, label: str = "case",

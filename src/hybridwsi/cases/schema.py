@@ -223,7 +223,10 @@ class ListOf(Node):
 
     def kind(self) -> str:
         n = f"{self.length} " if self.length else ""
-        return f"a list of {n}{self.item.kind().removeprefix('a ').removeprefix('an ')}s"
+        if isinstance(self.item, Number):  # "a list of 3 numbers [m]"
+            unit = f" [{self.item.unit}]" if self.item.unit else ""
+            return f"a list of {n}{'integers' if self.item.integer else 'numbers'}{unit}"
+        return f"a list of {n}entries, each {self.item.kind()}"
 
     def check(self, value: Any, at: KeyPath, ctx: Context) -> list[Any]:
         if not isinstance(value, list):
@@ -245,7 +248,7 @@ class Either(Node):
     options: tuple[Node, ...]
 
     def kind(self) -> str:
-        return " or ".join(o.kind() for o in self.options)
+        return self.doc or " or ".join(o.kind() for o in self.options)
 
     def check(self, value: Any, at: KeyPath, ctx: Context) -> Any:
         errors = []
@@ -399,7 +402,8 @@ def _vec3(unit: str, doc: str = "", **kw: Any) -> ListOf:
 
 _INERTIA = Either(options=(ListOf(item=nonnegative("kg m^2"), length=3),
                            ListOf(item=ListOf(item=Number(unit="kg m^2"), length=3), length=3)),
-                  doc="principal moments (Ixx, Iyy, Izz) or the 3x3 tensor about the CM")
+                  doc="3 principal moments [kg m^2] (Ixx, Iyy, Izz) or the 3 x 3 tensor "
+                      "about the CM")
 _WATER = {"rho": positive("kg/m^3", "water density (default [environment] rho)"),
           "g": positive("m/s^2", "gravity (default [environment] g)")}
 _MASS_PROPS = {"mass": positive("kg", "mass"), "cog": _vec3("m", "centre of mass"),
@@ -605,13 +609,13 @@ def _check_dof_sets(case: dict[str, Any], ctx: Context) -> None:
 
 #: [forces] switch -> (what its data is, whether the case has it)
 _NEEDS: dict[str, tuple[str, Callable[[dict[str, Any]], bool]]] = {
-    "mooring": ("a [mooring] table", lambda c: "mooring" in c),
+    "mooring": ("[mooring] table", lambda c: "mooring" in c),
     "morison": ("[hydrodynamics] drag_cd > 0",
                 lambda c: c.get("hydrodynamics", {}).get("drag_cd", 0.0) > 0.0),
-    "rotor": ("a [rotor] table", lambda c: "rotor" in c),
+    "rotor": ("[rotor] table", lambda c: "rotor" in c),
     "linear_damping": ("[hydrodynamics] additional_damping",
                        lambda c: bool(c.get("hydrodynamics", {}).get("additional_damping"))),
-    "external_force": ("an [external_force] table", lambda c: "external_force" in c),
+    "external_force": ("[external_force] table", lambda c: "external_force" in c),
 }
 
 
