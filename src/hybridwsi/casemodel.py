@@ -75,7 +75,7 @@ COMPONENT_VARIABLES = {"mooring": "F_mooring", "morison": "F_morison", "rotor": 
                        "linear_damping": "F_damping", "external_force": "F_external"}
 #: the module m1-moordyn's MoorDyn component lives in (``MoorDynForce.from_case``)
 MOORDYN_MODULE = "hybridwsi.forces.moordyn"
-#: largest share of a wave-elevation record's variance outside the BEM frequencies accepted
+#: largest share of a wave-elevation record's variance above the BEM frequencies accepted
 MAX_VARIANCE_OUTSIDE = 0.01
 #: accepted names of the force column of a force table with one DOF (case-insensitive, unit
 #: allowed); with several DOFs the columns are ``F_<DOF>``
@@ -217,17 +217,17 @@ def linear_components(case: Case, dofs: Sequence[str], *, stiffness: np.ndarray 
 def elevation_wave(coeffs: xr.Dataset, path: str | os.PathLike, column: str | None = None,
                    direction: float = 0.0) -> ElevationRecord:
     """A wave-elevation record file (:func:`hybridwsi.importers.read_elevation`) as the wave
-    of a run: its Fourier components inside the coefficients' frequencies. Refused when more
-    than :data:`MAX_VARIANCE_OUTSIDE` of η's variance lies outside them."""
+    of a run: its Fourier components up to the coefficients' highest frequency (below their
+    lowest one the transfer function is held). Refused when more than
+    :data:`MAX_VARIANCE_OUTSIDE` of η's variance lies above it."""
     t, eta, source = read_elevation(path, column)
-    omega = np.asarray(coeffs["omega"].values, dtype=float)
-    wave = ElevationRecord(t, eta, band=(float(omega.min()), float(omega.max())),
-                           source=source, direction=direction)
+    omega_max = float(np.max(coeffs["omega"].values))
+    wave = ElevationRecord(t, eta, omega_max=omega_max, source=source, direction=direction)
     if wave.variance_outside > MAX_VARIANCE_OUTSIDE:
         raise InputError(
             f"{source}: {wave.variance_outside:.1%} of the wave elevation's variance lies "
-            f"outside the coefficients' frequencies {omega.min():.4g}-{omega.max():.4g} "
-            "rad/s; low-pass filter the record or compute coefficients over a wider range")
+            f"above the coefficients' highest frequency {omega_max:.4g} rad/s; low-pass "
+            "filter the record or compute coefficients to higher frequencies")
     return wave
 
 

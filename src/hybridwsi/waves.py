@@ -120,6 +120,10 @@ class Wave:
     """Base class: subclasses implement :meth:`components` and :meth:`to_dict`."""
 
     direction: float = 0.0
+    #: components below the coefficients' lowest frequency are allowed: their transfer
+    #: function is interpolated towards the long-wave limit (:func:`long_wave_limit`); a
+    #: record's content there. Synthetic seas must lie inside the range.
+    long_waves: bool = False
 
     def components(self) -> WaveComponents:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -280,8 +284,8 @@ class PiersonMoskowitz(JONSWAP):
 class ElevationRecord(Wave):
     """A recorded wave elevation η(t) at the body's reference point, as a wave.
 
-    Its components are the discrete Fourier transform of the record, mean removed and padded
-    with zeros to ``pad`` times its length (``scipy.fft.next_fast_len``): the excitation force
+    Its components are the discrete Fourier transform of the record padded with zeros to
+    ``pad`` times its length (``scipy.fft.next_fast_len``): the excitation force
     ``F_exc = Re[Σ_j c_j F_e(ω_j) e^{-iω_j t}]`` (:func:`excitation_force`) is then the
     convolution of the record with the excitation impulse response (non-causal: the force
     at t feels the elevation before and after t), evaluated at any time, the solver's half
@@ -292,15 +296,24 @@ class ElevationRecord(Wave):
     missing sea (ramp the start; leave the end out of comparisons: tests/test_wave_elevation.py
     measures it).
 
+    η is taken as measured from the still-water level, its mean included: the mean of a
+    finite record of waves is not zero (25.3 periods of a regular wave: 0.6 % of its
+    amplitude), and removing it would shift the heave force by ρ g A_wp times that mean (1.3 %
+    of the sphere's force amplitude). A probe with a datum offset must be corrected first.
+    Components above ``omega_max`` (the coefficients' highest frequency) are left out
+    (:attr:`variance_outside` is their share of η's variance); those below the coefficients'
+    lowest frequency, the mean among them, take the transfer function interpolated between
+    its long-wave limit (:func:`long_wave_limit`: a uniform rise of the water, ``C[:, Heave]``)
+    and its value there (:attr:`Wave.long_waves`).
+
     Parameters
     ----------
     time : array, shape (n,)
         Sample times [s], uniform (the first sample becomes t = 0 of the wave).
     eta : array, shape (n,)
         Elevation [m] at the reference point.
-    band : (float, float), optional
-        Frequencies kept [rad/s] (those of the BEM coefficients); None: all but the mean and
-        the Nyquist bin. :attr:`variance_outside` is the share of η's variance left out.
+    omega_max : float, optional
+        Highest frequency kept [rad/s]; None: all but the Nyquist bin.
     pad : float
         Padded length over the record length (>= 2 for a linear convolution).
     source : str
@@ -309,7 +322,9 @@ class ElevationRecord(Wave):
         Propagation direction [rad] of the excitation transfer function used.
     """
 
-    def __init__(self, time: Any, eta: Any, *, band: tuple[float, float] | None = None,
+    long_waves = True
+
+    def __init__(self, time: Any, eta: Any, *, omega_max: float | None = None,
                  pad: float = 2.0, source: str = "", direction: float = 0.0) -> None:
         t = np.asarray(time, dtype=float)
         x = np.asarray(eta, dtype=float)
@@ -329,21 +344,22 @@ class ElevationRecord(Wave):
         self.source, self.direction = source, float(direction)
         self.mean = float(np.mean(x))
         m = scipy.fft.next_fast_len(int(math.ceil(pad * self.n)), real=True)
-        spectrum = np.fft.rfft(x - self.mean, n=m)
+        spectrum = np.fft.rfft(x, n=m)
         omega = 2.0 * np.pi * np.arange(spectrum.size) / (m * self.dt)
-        inner = np.arange(spectrum.size) > 0
+        inner = np.ones(spectrum.size, dtype=bool)
         if m % 2 == 0:
             inner[-1] = False  # the Nyquist bin has no phase; never kept
         keep = inner.copy()
-        if band is not None:
-            lo, hi = (float(b) for b in band)
-            keep &= (omega >= lo * (1 - 1e-12)) & (omega <= hi * (1 + 1e-12))
-        # η_k = Re Σ_j c_j e^{-iω_j t_k} with c_j = 2 conj(X_j) / m (rfft: Σ η e^{-iωt})
+        if omega_max is not None:
+            keep &= omega <= float(omega_max) * (1 + 1e-12)
+        # η_k = Re Σ_j c_j e^{-iω_j t_k} with c_j = 2 conj(X_j) / m (rfft: Σ η e^{-iωt}),
+        # the mean (ω = 0) counted once
         c = 2.0 * np.conj(spectrum) / m
+        c[0] /= 2.0
         power = np.abs(c) ** 2
         total = power[inner].sum()
         self.variance_outside = float(power[inner & ~keep].sum() / total) if total > 0 else 0.0
-        self.band = None if band is None else (float(band[0]), float(band[1]))
+        self.omega_max = None if omega_max is None else float(omega_max)
         self.sha256 = hashlib.sha256(np.ascontiguousarray(np.column_stack([t, x])).tobytes()
                                      ).hexdigest()
         self._components = WaveComponents(np.abs(c[keep]), omega[keep], -np.angle(c[keep]))
@@ -354,7 +370,7 @@ class ElevationRecord(Wave):
     def to_dict(self) -> dict[str, Any]:
         return {"type": "elevation_record", "source": self.source, "sha256": self.sha256,
                 "n_samples": self.n, "dt": self.dt, "t0": self.t0, "mean": self.mean,
-                "band": self.band, "variance_outside_band": self.variance_outside,
+                "omega_max": self.omega_max, "variance_outside": self.variance_outside,
                 "n_components": int(self._components.omega.size), "direction": self.direction}
 
 
@@ -503,7 +519,7 @@ class AiryKinematics:
                              f"(depth {depth:g} m)")
         ramp_factor(np.zeros(1), ramp)  # validates the ramp (finite, >= 0)
         comp = wave.components()
-        keep = comp.amplitude > 0
+        keep = (comp.amplitude > 0) & (comp.omega > 0)  # a still level (ω = 0) has no flow
         omega, amp = comp.omega[keep], comp.amplitude[keep]
         k = dispersion_k(omega, depth, g)
         beta = float(getattr(wave, "direction", 0.0))
@@ -593,6 +609,22 @@ def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float
     return np.asarray(coeffs["omega"].values, dtype=float), vals
 
 
+def long_wave_limit(coeffs: xr.Dataset, dofs: list[str]) -> np.ndarray:
+    """``F_e(ω → 0)`` [N/m, N m/m] on ``dofs``: a wave much longer than the body lifts the
+    water around it uniformly, so the force per unit elevation is the hydrostatic stiffness
+    against heave, ``C[dof, Heave]`` (C33; C35, C34 through the waterplane's moments); zero
+    when the coefficients have no heave."""
+    if "hydrostatic_stiffness" not in coeffs:
+        raise InputError("coefficients have no 'hydrostatic_stiffness': the long-wave limit "
+                         "of the excitation force is unknown")
+    c = coeffs["hydrostatic_stiffness"]
+    if "Heave" not in [str(d) for d in c["radiating_dof"].values]:
+        return np.zeros(len(dofs))
+    column = c.sel(radiating_dof="Heave")
+    have = [str(d) for d in column["influenced_dof"].values]
+    return np.array([float(column.values[have.index(d)]) if d in have else 0.0 for d in dofs])
+
+
 def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
                      dof: str | list[str] = "Heave", *, ramp: float = 0.0,
                      with_elevation: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -614,7 +646,12 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
     comp = wave.components()
     keep = comp.amplitude > 0
     w = comp.omega[keep]
-    if w.size and (w.min() < w_grid[0] * (1 - 1e-9) or w.max() > w_grid[-1] * (1 + 1e-9)):
+    below = bool(w.size) and w.min() < w_grid[0] * (1 - 1e-9)
+    if below and wave.long_waves:  # a record's long waves: towards the limit at ω = 0
+        w_grid = np.concatenate([[0.0], w_grid])
+        vals = np.concatenate([long_wave_limit(coeffs, dofs)[None, :], vals])
+        below = False
+    if w.size and (below or w.max() > w_grid[-1] * (1 + 1e-9)):
         raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside the "
                          f"coefficients' range {w_grid[0]:.4g}–{w_grid[-1]:.4g} rad/s "
                          "(narrow omega_range or recompute the BEM coefficients)")

@@ -159,7 +159,7 @@ def mooring_model(case: Mapping[str, Any], override: str | None = None) -> str:
     or ``override`` (the command line's ``--mooring``) when given; an override needs the
     case's ``[mooring]`` table."""
     model = case.get("forces", {}).get("mooring", "table" if "mooring" in case else "none")
-    if override is None:
+    if override is None or override == model:
         return model
     if override not in MOORING_MODELS:
         raise InputError(f"mooring model must be one of {', '.join(MOORING_MODELS)}, got "
