@@ -258,3 +258,24 @@ def test_forces_table_is_resolved_and_mooring_model_overridden():
     with pytest.raises(InputError, match="no \\[mooring\\] table"):
         mooring_model(sphere, "table")
     assert isinstance(CASE, Table) and json.dumps(oc3)  # plain values only
+
+
+DOC = Path(__file__).resolve().parents[1] / "docs" / "CASES.md"
+
+
+def test_docs_reference_is_the_schema_and_its_example_loads(tmp_path):
+    from hybridwsi.cases.schema import markdown_reference
+
+    text = DOC.read_text()
+    block = text.split("<!-- schema reference: begin -->\n")[1].split(
+        "<!-- schema reference: end -->")[0]
+    assert block == markdown_reference()
+    example = text.split("```toml\n")[1].split("```")[0]
+    (tmp_path / "plate_spar.toml").write_text(example)
+    case = load_case(tmp_path / "plate_spar.toml")
+    assert case["environment"]["water_depth"] == 200.0
+    assert case["hydrodynamics"]["additional_damping"] == {"Heave": 20000.0}
+    assert case["forces"]["morison"] and case["forces"]["mooring"] == "none"
+    body = body_from_case(case)
+    # floating: the displaced mass of the profile
+    assert body.mass == pytest.approx(1025.0 * body.displaced_volume(), rel=1e-12)

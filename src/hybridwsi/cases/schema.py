@@ -476,24 +476,42 @@ _BEM = Table(fields={
     "low_kh_panels": integer(20)},
     exclusive=(("panel_size", "n_panels"),), checks=(_omega_order,))
 
-_SEA = Table(fields={"hs": positive("m", required=True), "tp": positive("s", required=True),
-                     "seed": integer(0, required=True)})
-_NETWORK_FIELDS: dict[str, Node] = {
-    "hidden": ListOf(item=integer(1), min_length=1), "activation": Text(),
-    "window": integer(1), "stride": integer(1), "lead": integer(0),
-    "lr": positive(), "max_epochs": integer(1), "patience": integer(1),
-    "batch_size": integer(1), "input_noise": nonnegative(), "seed": integer(0),
-    "val_fraction": Number(lo=0.0, hi=1.0), "weight_decay": nonnegative()}
-_INPUTS = ListOf(item=Text(choices=("z", "zdot", "zddot", "eta")), min_length=1, unique=True)
+_SEA = Table(fields={"hs": positive("m", "significant wave height", required=True),
+                     "tp": positive("s", "peak period", required=True),
+                     "seed": integer(0, "seed of the random phases", required=True)},
+             doc="a JONSWAP sea (gamma 3.3)")
+_NETWORK_FIELDS: dict[str, Node] = {  # hybridwsi.surrogate.network.ForceNetwork's parameters
+    "hidden": ListOf(item=integer(1), min_length=1, doc="hidden layer widths"),
+    "activation": Text(doc="activation function (tanh, relu, ...)"),
+    "window": integer(1, "taps per input"), "stride": integer(1, "samples between taps"),
+    "lead": integer(0, "samples the wave elevation leads"), "lr": positive("", "learning rate"),
+    "max_epochs": integer(1, "training epochs at most"),
+    "patience": integer(1, "epochs without improvement before stopping"),
+    "batch_size": integer(1, "mini-batch size [samples]"),
+    "input_noise": nonnegative("", "input noise, x std of each input"),
+    "seed": integer(0, "seed of the initialisation and batch order"),
+    "val_fraction": Number(lo=0.0, hi=1.0, doc="validation share of the samples"),
+    "weight_decay": nonnegative("", "Adam weight decay")}
+_INPUTS = ListOf(item=Text(choices=("z", "zdot", "zddot", "eta")), min_length=1, unique=True,
+                 doc="the network's input channels")
 _HYBRID = Table(fields={
-    "dofs": ListOf(item=Dof(), min_length=1, unique=True), "dt": positive("s"),
-    "duration": positive("s"), "quick_duration": positive("s"), "ramp": nonnegative("s"),
-    "train": TableList(table=_SEA), "test": TableList(table=_SEA), "long": _SEA,
-    "long_duration": positive("s"), "quick_long_duration": positive("s"),
-    "force_accuracy": ListOf(item=positive(), min_length=1), "perturbation": positive(),
-    "mode": Text(),
-    "partitions": MapOf(value=Table(fields={"inputs": _INPUTS, **_NETWORK_FIELDS})),
-    "network": Table(fields=_NETWORK_FIELDS)})
+    "dofs": ListOf(item=Dof(), min_length=1, unique=True, doc="DOFs of the hybrid"),
+    "dt": positive("s", "step of the reference runs and of the rollout"),
+    "duration": positive("s", "length of each sea"),
+    "quick_duration": positive("s", "the same with reproduce --quick"),
+    "ramp": nonnegative("s", "excitation ramp"),
+    "train": TableList(table=_SEA, doc="training seas"),
+    "test": TableList(table=_SEA, doc="held-out seas"), "long": _SEA,
+    "long_duration": positive("s", "length of the long sea"),
+    "quick_long_duration": positive("s", "the same with reproduce --quick"),
+    "force_accuracy": ListOf(item=positive(), min_length=1,
+                             doc="relative force accuracies of the identifiability test"),
+    "perturbation": positive("", "initial offset of the lagged runs, x std(z)"),
+    "mode": Text(doc="coupling of the rollout (lagged, corrected, implicit)"),
+    "partitions": MapOf(value=Table(fields={"inputs": _INPUTS, **_NETWORK_FIELDS}),
+                        doc="network settings per partition, over [hybrid.network]"),
+    "network": Table(fields=_NETWORK_FIELDS, doc="network settings")},
+    doc="the report's floating-wind hybrid (report/fowt_hybrid.py)")
 
 _DOF_BOX = {d: nonnegative("rad" if is_rotation(d) else "m") for d in RIGID_DOFS}
 _MOORING = Table(fields={
@@ -545,50 +563,72 @@ CASE = Table(fields={
     "bem": _BEM, "bem_quick": _BEM,
     "forces": _FORCES,
     "hydrodynamics": Table(fields={
-        "displaced_volume": positive("m^3"), "buoyancy": positive("N"),
-        "C33": Number(unit="N/m"), "C44": Number(unit="N m/rad"), "C55": Number(unit="N m/rad"),
+        "displaced_volume": positive("m^3", "reference value (tests)"),
+        "buoyancy": positive("N", "reference value rho g V0 (tests)"),
+        "C33": Number(unit="N/m", doc="reference hydrostatic stiffness (tests)"),
+        "C44": Number(unit="N m/rad", doc="reference, without the weight term (tests)"),
+        "C55": Number(unit="N m/rad", doc="reference, without the weight term (tests)"),
         "drag_cd": nonnegative("", "Morison drag coefficient"),
         "morison_ca": nonnegative("", "Morison added-mass coefficient (recorded)"),
         "additional_damping": MapOf(keys="dof", value=DofNumber(
-            linear="N s/m", rotational="N m s/rad", lo=0.0))}),
-    "drag": Table(fields={"strip_length": positive("m"), "n_strips": integer(1)},
-                  exclusive=(("strip_length", "n_strips"),)),
+            linear="N s/m", rotational="N m s/rad", lo=0.0),
+            doc="additional linear damping per DOF (the other DOFs 0)")}),
+    "drag": Table(fields={"strip_length": positive("m", "strip length (default 1 m)"),
+                          "n_strips": integer(1, "number of equal strips instead")},
+                  exclusive=(("strip_length", "n_strips"),),
+                  doc="Morison strips along the hull profile"),
     "mooring": _MOORING,
     "rotor": Table(fields={
-        "state": Text(choices=("parked", "thrust"), default="parked"),
-        "hub": _vec3("m", "where the thrust acts"), "thrust": Number(unit="N"),
-        "aero_damping": Number(unit="N s/m", default=0.0)}),
+        "state": Text(choices=("parked", "thrust"), default="parked",
+                      doc="parked: no force; thrust: the two numbers below"),
+        "hub": _vec3("m", "where the thrust acts"),
+        "thrust": Number(unit="N", doc="mean thrust along +X"),
+        "aero_damping": Number(unit="N s/m", default=0.0,
+                               doc="linear damping on the hub's fore-aft velocity")},
+        doc="forces/rotor.py"),
     "external_force": Table(fields={"file": FilePath(
         what="force table", required=True,
         doc="CSV: 'time [s]' and F (one DOF) or F_<DOF> columns, units in the header")}),
     "force_accuracy": MapOf(value=Number(lo=0.0, hi=1.0, open_lo=True),
                             doc="relative accuracy of each generator's force"),
     "sweep": Table(fields={
-        "duration": positive("s"), "dt": positive("s"), "ramp": nonnegative("s"),
-        "dofs": ListOf(item=Dof(), min_length=1, unique=True),
-        "gamma": Number(lo=1.0), "wave_components": integer(1),
-        "wave_kinematics": Boolean()}),
-    "simulation": Table(fields={"duration": positive("s"), "dt": positive("s"),
-                                "ramp": nonnegative("s")}),
+        "duration": positive("s", "simulated time per sea"), "dt": positive("s", "time step"),
+        "ramp": nonnegative("s", "excitation ramp; statistics start after it"),
+        "dofs": ListOf(item=Dof(), min_length=1, unique=True, doc="DOFs simulated"),
+        "gamma": Number(lo=1.0, doc="JONSWAP peak enhancement"),
+        "wave_components": integer(1, "JONSWAP frequency components"),
+        "wave_kinematics": Boolean(doc="Morison drag on the wave particle velocity")},
+        doc="defaults of hybridwsi sweep --case (and of simulate --case)"),
+    "simulation": Table(fields={"duration": positive("s", "simulated time"),
+                                "dt": positive("s", "time step"),
+                                "ramp": nonnegative("s", "excitation ramp")},
+                        doc="defaults of hybridwsi simulate --case (over [sweep])"),
     "regular_waves": Table(fields={
-        "period": Either(options=(positive("s"), ListOf(item=positive("s"), min_length=1))),
-        "height": Either(options=(positive("m"), ListOf(item=positive("m"), min_length=1))),
+        "period": Either(options=(positive("s"), ListOf(item=positive("s"), min_length=1)),
+                         doc="wave period(s)"),
+        "height": Either(options=(positive("m"), ListOf(item=positive("m"), min_length=1)),
+                         doc="wave height(s)"),
         "duration": positive("s"), "dt": positive("s"), "ramp": nonnegative("s"),
-        "window_start": nonnegative("s"), "steady_state_start": nonnegative("s")}),
-    "reference_natural_frequencies": MapOf(value=positive("Hz")),
+        "window_start": nonnegative("s", "start of the regression window"),
+        "steady_state_start": nonnegative("s", "start of the steady-state window")},
+        doc="the case's regular seas (the paper's, the definition's)"),
+    "reference_natural_frequencies": MapOf(value=positive("Hz"),
+                                           doc="published natural frequencies (tests)"),
     "hybrid": _HYBRID,
     # reference data of the built-in cases (the paper's and the experiments' numbers)
     "paper_values": Table(fields={"A_inf": Number(unit="kg"), "C": Number(unit="N/m"),
-                                  "Te": positive("s")}),
+                                  "Te": positive("s")}, doc="as printed in the paper"),
     "paper_table1": MapOf(value=MapOf(value=Table(fields={
         "alpha": Number(unit="kg"), "beta": Number(unit="N s/m"),
-        "gamma": Number(unit="N/m")}))),
+        "gamma": Number(unit="N/m")})), doc="the paper's Table 1: generator -> case"),
     "sph_regular_waves": Table(fields={
         "dp": positive("m"), "depth": positive("m"), "tf": positive("s"), "hdx": positive(),
         "smooth_body": Boolean(), "gain": positive(), "symmetry": Text(), "packing": Text(),
-        "alpha_body": nonnegative()}),
+        "alpha_body": nonnegative()}, doc="the shipped SPH run's set-up (sph/tank.py)"),
     "experiment": Table(fields={"water_depth": positive("m"), "Te0": positive("s"),
-                                "rms_window": ListOf(item=nonnegative(), length=2)}),
+                                "rms_window": ListOf(item=nonnegative(), length=2,
+                                                     doc="in units of Te0")},
+                        doc="the decay experiment's parameters"),
     "drops": MapOf(value=positive("m"), doc="drop heights by name"),
 })
 
@@ -692,5 +732,45 @@ def iter_nodes(node: Node = CASE, at: KeyPath = ()) -> Sequence[tuple[KeyPath, N
     return out
 
 
+def _reference_rows(node: Node, at: KeyPath) -> list[tuple[str, str, str, str]]:
+    """``(key, value, required/default, meaning)`` of ``node`` and everything below it."""
+    need = "required" if node.required else (
+        "" if node.default is MISSING else f"default `{json.dumps(node.default)}`")
+    kind = node.kind()
+    doc = "" if node.doc == kind else node.doc
+    rows = [(dotted(at), kind.replace("|", "/"), need, doc.replace("|", "/"))]
+    if isinstance(node, Table):
+        for key, child in node.fields.items():
+            rows += _reference_rows(child, (*at, key))
+    elif isinstance(node, OneOf):
+        for name, table in node.variants.items():
+            rows.append((f'{dotted(at)}.type = "{name}"', "", "", ""))
+            for key, child in table.fields.items():
+                rows += _reference_rows(child, (*at, key))
+    elif isinstance(node, MapOf):
+        rows += _reference_rows(node.value, (*at, "<DOF>" if node.keys == "dof" else "<name>"))
+    elif isinstance(node, TableList):
+        for key, child in node.table.fields.items():
+            rows += _reference_rows(child, (*at, 0, key))
+    return rows
+
+
+def markdown_reference() -> str:
+    """The key reference of docs/CASES.md, generated from :data:`CASE` (a test keeps the
+    document equal to it): the top-level keys, then one table per top-level table."""
+    head = ["| key | value | | meaning |", "|---|---|---|---|"]
+    scalars = [k for k, n in CASE.fields.items() if not isinstance(n, (Table, OneOf, MapOf))]
+    out = ["#### top level", "", *head]
+    for key in scalars:
+        out += [f"| `{k}` | {v} | {n} | {d} |"
+                for k, v, n, d in _reference_rows(CASE.fields[key], (key,))]
+    for key, node in CASE.fields.items():
+        if key in scalars:
+            continue
+        out += ["", f"#### `[{key}]`", "", *head]
+        out += [f"| `{k}` | {v} | {n} | {d} |" for k, v, n, d in _reference_rows(node, (key,))]
+    return "\n".join(out) + "\n"
+
+
 __all__ = ["CASE", "BODIES", "MOORING_MODELS", "Context", "Node", "Number", "Table",
-           "canonical_hash", "dotted", "validate", "iter_nodes"]
+           "canonical_hash", "dotted", "validate", "iter_nodes", "markdown_reference"]

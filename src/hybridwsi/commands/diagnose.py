@@ -55,6 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="force variable/column to regress [N or N m] (default F_tot)")
     o.add_format(parser)
     o.add_columns(parser)
+    o.add_eta(parser)
     o.add_dofs(parser, "the DOFs to diagnose (a CSV: the DOF names of its columns, default its "
                "'# dof:' line, else Heave; other files: a subset of theirs)")
     parser.add_argument("--known", action="append", default=[], metavar="NAME[=VALUE]",
@@ -127,7 +128,7 @@ def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[
         return select_dofs(example_history(), args.dofs), {"file": None, "example": EXAMPLE}
     if not args.file:
         raise InputError("no input: give a history FILE (CSV, NetCDF, ...) or --example")
-    mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot")}
+    mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot", "eta")}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         hist = read_dofs(args.file, args.dofs, format=args.format, mass=args.mass,
