@@ -663,7 +663,31 @@ def _history_states(hist: xr.Dataset, dofs: tuple[str, ...], index6: list[int]) 
     return q
 
 
-class MooringForce(KnownComponent):
+class _QuasiStatic(KnownComponent):
+    """What the quasi-static mooring components share: the DOFs they act on (the others held
+    at 0), the preload ``F0`` they leave out and the stiffness ``K`` of their linear part."""
+
+    name = "mooring"
+
+    def _set_up(self, dofs: Sequence[str] | str, preload: np.ndarray,
+                stiffness: np.ndarray) -> None:
+        self.dofs = check_dofs(dofs)
+        self._index = index(self.dofs)
+        self._f0 = preload
+        self._k = stiffness
+
+    def _check(self, n_dof: int) -> None:
+        if n_dof != len(self.dofs):
+            raise InputError(f"mooring component is set up for {len(self.dofs)} DOFs "
+                             f"({', '.join(self.dofs)}), got {n_dof}")
+
+    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._check(n_dof)
+        zero = np.zeros((n_dof, n_dof))
+        return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
+
+
+class MooringForce(_QuasiStatic):
     """Quasi-static mooring as a force component: ``F(q) - F0`` on the chosen DOFs.
 
     Parameters
@@ -681,14 +705,9 @@ class MooringForce(KnownComponent):
     interpolant restricted to ``dofs`` (Eq. 5-1 sign convention); no added mass, no damping.
     """
 
-    name = "mooring"
-
     def __init__(self, table: MooringTable, dofs: Sequence[str] | str = RIGID_DOFS) -> None:
         self.table = table
-        self.dofs = check_dofs(dofs)
-        self._index = index(self.dofs)
-        self._f0 = table.preload()
-        self._k = table.stiffness()
+        self._set_up(dofs, table.preload(), table.stiffness())
 
     @classmethod
     def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None
@@ -706,11 +725,6 @@ class MooringForce(KnownComponent):
         q = np.zeros(z.shape[:-1] + (6,))
         q[..., self._index] = z
         return q
-
-    def _check(self, n_dof: int) -> None:
-        if n_dof != len(self.dofs):
-            raise InputError(f"mooring component is set up for {len(self.dofs)} DOFs "
-                             f"({', '.join(self.dofs)}), got {n_dof}")
 
     @property
     def n_lines(self) -> int:
@@ -730,11 +744,6 @@ class MooringForce(KnownComponent):
         self._check(z.shape[-1])
         return (self.table.force6(self._full(z)) - self._f0)[..., self._index]
 
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        self._check(n_dof)
-        zero = np.zeros((n_dof, n_dof))
-        return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
-
     def compiled_force(self, n_dof: int) -> Any:
         """Numba kernel of :meth:`ode_force` (the table's), or None without Numba."""
         self._check(n_dof)
@@ -747,7 +756,7 @@ class MooringForce(KnownComponent):
                 f"DOFs {','.join(self.dofs)})")
 
 
-class QuasiStaticMooring(KnownComponent):
+class QuasiStaticMooring(_QuasiStatic):
     """The mooring solved by MoorPy at every call: ``F(q) - F0`` on the chosen DOFs.
 
     What :class:`MooringForce` interpolates, without the interpolation: each call places the
@@ -765,14 +774,9 @@ class QuasiStaticMooring(KnownComponent):
         DOFs of the histories and ODE states this component acts on.
     """
 
-    name = "mooring"
-
     def __init__(self, system: MooringSystem, dofs: Sequence[str] | str = RIGID_DOFS) -> None:
         self.system = system
-        self.dofs = check_dofs(dofs)
-        self._index = index(self.dofs)
-        self._f0 = system.preload()
-        self._k = system.stiffness()
+        self._set_up(dofs, system.preload(), system.stiffness())
         self._solved: dict[int, tuple[bytes, np.ndarray, np.ndarray]] = {}
 
     @classmethod
@@ -801,11 +805,6 @@ class QuasiStaticMooring(KnownComponent):
             self._solved[key] = (q.tobytes(), force, tensions)
         return force, tensions
 
-    def _check(self, n_dof: int) -> None:
-        if n_dof != len(self.dofs):
-            raise InputError(f"mooring component is set up for {len(self.dofs)} DOFs "
-                             f"({', '.join(self.dofs)}), got {n_dof}")
-
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
         z = np.asarray(z, dtype=float)
         self._check(z.shape[-1])
@@ -827,11 +826,6 @@ class QuasiStaticMooring(KnownComponent):
         q = _history_states(hist, self.dofs, self._index)
         t = np.asarray(hist["time"].values, dtype=float)
         return np.stack([self._solve(row, tk)[1] for row, tk in zip(q, t)])
-
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        self._check(n_dof)
-        zero = np.zeros((n_dof, n_dof))
-        return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
 
     def describe(self) -> str:
         return (f"mooring_quasi_static({self.n_lines} lines, MoorPy each call, yaw spring "
