@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from hybridwsi.casemodel import body_from_case
 from hybridwsi.cases import (
     available,
-    body_from_case,
     case_path,
     from_dict,
     load_case,

@@ -17,7 +17,7 @@ pytest.importorskip("moorpy")
 
 from hybridwsi import cummins, sweep
 from hybridwsi.cases import from_dict, load_case, raw_case
-from hybridwsi.hydro.bem import case_coefficients
+from hybridwsi.casemodel import case_coefficients
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
 from hybridwsi.forces import MooringForce, MooringSystem, MorisonDrag, additional_damping
@@ -225,3 +225,24 @@ def test_heave_statistics_match_the_frequency_domain(tmp_path):
         var += 0.5 * (abs(frequency_response(coeffs, w, f_hat, k33, b_add, dofs)[0]) * a) ** 2
     assert std_td == pytest.approx(np.sqrt(var), rel=2e-3)
     assert stats["cases"]["hs6_tp10_s0"]["eta"]["hs_4std"] == pytest.approx(hs, rel=0.02)
+
+
+def test_sweep_with_the_quasi_static_mooring_records_the_tensions(tmp_path):
+    """--mooring quasi-static: MoorPy solved every call, the tensions stored per sea and
+    summarised per line in the manifest (mean, std, max after the ramp)."""
+    cfg = SweepConfig.for_case("oc3_hywind", duration=10.0, dt=0.1, ramp=2.0,
+                               mooring="quasi-static")
+    store = sweep.run_sweep(sweep.case_grid([4.0], [10.0], 1), tmp_path, cfg,
+                            scheduler="synchronous", progress=False)
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["settings"]["mooring"] == "quasi-static"
+    assert manifest["inputs"]["models"]["mooring"] == "quasi-static"
+    assert manifest["inputs"]["mooring_table"] is None
+    hist = sweep.case_history(sweep.open_sweep(store), 0)
+    after = hist["time"].values >= 2.0
+    stats = manifest["statistics"]["cases"]["hs4_tp10_s0"]["T_fairlead"]
+    for k, line in enumerate(("1", "2", "3")):
+        t = hist["T_fairlead"].values[after, k]
+        assert stats[line]["max"] == pytest.approx(t.max(), rel=1e-12)
+        assert stats[line]["mean"] == pytest.approx(t.mean(), rel=1e-12)
+    assert "F_mooring" in hist and hist["F_mooring"].attrs["component"] == "mooring"

@@ -1,8 +1,9 @@
 """A case, built: its body, coefficients and force components, and its Cummins runs.
 
 The one place where a case (:mod:`hybridwsi.cases`: a built-in name or the user's TOML file)
-becomes the objects of the time-domain model; ``simulate``, ``sweep`` and the report all come
-here. The ODE (paper Eq. 9) is
+becomes objects: its body (:func:`body_from_case`), its BEM set-up (:func:`bem_arguments`) and
+coefficients (:func:`case_coefficients`), and the components of its time-domain model;
+``bem``, ``simulate``, ``sweep`` and the report all come here. The ODE (paper Eq. 9) is
 
     (M + A∞) z̈ + ∫K ż + C z = F_exc(t) + Σ_k F_k
 
@@ -48,7 +49,8 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi import cummins
-from hybridwsi.cases import Case, bem_arguments, body_from_case, load_case, mooring_model
+from hybridwsi.bodies import FloatingSphere, body_from_dict
+from hybridwsi.cases import Case, load_case, mooring_model
 from hybridwsi.dofs import check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces import (
@@ -82,6 +84,147 @@ MAX_VARIANCE_OUTSIDE = 0.01
 FORCE_COLUMNS = ("F", "F_ext", "force")
 
 
+#: keys of a case's ``[bem]`` table passed to :func:`hybridwsi.hydro.bem.compute` unchanged
+BEM_KEYS = ("water_depth", "panel_size", "n_panels", "dofs", "method", "deep_water_kh",
+            "low_kh", "low_kh_panels", "wave_directions")
+
+
+# ---------------------------------------------------------------------------- case -> body
+def body_from_case(case: Mapping[str, Any]):
+    """The floating body (:class:`hybridwsi.bodies.Body`) of a case's ``[body]`` table.
+
+    Two forms:
+
+    - ``type = "sphere"`` (or no ``type``): the keyword arguments of
+      :class:`~hybridwsi.bodies.FloatingSphere` (``paper_sphere.toml``);
+    - a ``type`` (:func:`hybridwsi.bodies.body_from_dict`; e.g. ``"rigid_assembly"`` with a
+      ``[body.hull]`` table of ``type = "axisymmetric"`` and a ``profile``, ``[[body.items]]``
+      with ``name``, ``mass`` [kg], ``cm`` [m], ``inertia`` [kg m^2] about the item's CM, and a
+      ``reference_point`` [m]). ``hull.structure`` names the item whose mass properties are the
+      hull's own (hull geometry and its structural mass are one rigid part); that item leaves
+      the list so nothing is counted twice.
+
+    Bodies take ``rho`` and ``g`` from ``[environment]`` unless they give their own, and the
+    case's ``name`` unless they give one.
+
+    Raises
+    ------
+    InputError
+        A missing or malformed entry.
+    """
+    spec = case.get("body") if isinstance(case, Mapping) else None
+    if not isinstance(spec, Mapping):
+        raise InputError("case has no [body] table")
+    env = case.get("environment", {})
+    if spec.get("type", "sphere") == "sphere":
+        try:
+            return FloatingSphere(**_with_water({k: v for k, v in spec.items() if k != "type"},
+                                                env))
+        except TypeError as exc:
+            raise InputError(f"[body] of type sphere: {exc}") from None
+    spec = {**spec, "name": spec.get("name", case.get("name"))}
+    if "hull" in spec:
+        spec["hull"], spec["items"] = _hull_and_items(spec["hull"], spec.get("items", []), env)
+    else:
+        spec = _with_water(spec, env)
+    return body_from_dict(spec)
+
+
+def _with_water(spec: Mapping[str, Any], env: Mapping[str, Any]) -> dict[str, Any]:
+    """``spec`` with the environment's ``rho`` and ``g`` where it has none."""
+    return {**{k: env[k] for k in ("rho", "g") if k in env}, **spec}
+
+
+def _hull_and_items(hull: Any, items: Any, env: Mapping[str, Any]
+                    ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The hull dict (with water and its structure item's mass properties) and the items."""
+    if not isinstance(hull, Mapping) or not isinstance(items, list):
+        raise InputError("[body.hull] must be a table and [[body.items]] a list of tables")
+    hull = _with_water(hull, env)
+    if hull.get("type") == "sphere":
+        hull["type"] = "FloatingSphere"
+    structure = hull.pop("structure", None)
+    if structure is None:
+        return hull, list(items)
+    own = [it for it in items if isinstance(it, Mapping) and it.get("name") == structure]
+    if len(own) != 1:
+        raise InputError(f"[body.hull] structure = {structure!r} must name exactly one of "
+                         "[[body.items]]")
+    item = own[0]
+    try:
+        hull.update(mass=item["mass"], cog=item["cm"], inertia=item.get("inertia"))
+    except KeyError as exc:
+        raise InputError(f"mass item {structure!r} has no {exc}") from None
+    return hull, [it for it in items if it is not item]
+
+
+# ---------------------------------------------------------------------------- case -> BEM
+def frequencies(cfg: Mapping[str, Any]) -> np.ndarray:
+    """Wave frequencies [rad/s] of a ``[bem]`` table.
+
+    ``omega_min``, ``omega_max`` [rad/s] and ``n_omega``; ``spacing``:
+
+    - ``"geometric"`` (default): log-spaced (the paper's sphere);
+    - ``"blend"``: spacing proportional to ``omega + omega_blend``, i.e.
+      ``omega_k = (omega_min + c) (q^k) - c`` with ``c = omega_blend`` [rad/s]: nearly uniform
+      well below ``c`` (where the coefficients barely change: long waves), geometric well above.
+
+    Raises
+    ------
+    InputError
+        Missing keys, ``0 < omega_min < omega_max`` violated, fewer than 2 frequencies or an
+        unknown spacing.
+    """
+    try:
+        lo, hi, n = float(cfg["omega_min"]), float(cfg["omega_max"]), int(cfg["n_omega"])
+    except KeyError as exc:
+        raise InputError(f"[bem] needs {exc}") from None
+    except (TypeError, ValueError):
+        raise InputError("[bem] omega_min, omega_max must be numbers, n_omega an integer") from None
+    if not (0 < lo < hi < math.inf) or n < 2:
+        raise InputError(f"[bem] needs 0 < omega_min < omega_max and n_omega >= 2, got "
+                         f"{lo}, {hi}, {n}")
+    spacing = cfg.get("spacing", "geometric")
+    if spacing == "geometric":
+        return np.geomspace(lo, hi, n)
+    if spacing == "blend":
+        c = float(cfg.get("omega_blend", 0.0))
+        if not (math.isfinite(c) and c >= 0):
+            raise InputError(f"[bem] omega_blend must be >= 0 rad/s, got {c}")
+        w = np.geomspace(lo + c, hi + c, n) - c
+        w[[0, -1]] = lo, hi  # exact ends (round-off of the shift)
+        return w
+    raise InputError(f"[bem] spacing must be 'geometric' or 'blend', got {spacing!r}")
+
+
+def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]:
+    """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` for a case:
+    ``compute(**bem_arguments(case))``.
+
+    Parameters
+    ----------
+    case : dict
+        A case (:func:`hybridwsi.cases.load_case`: its tables checked by the schema).
+    table : str
+        ``"bem"`` (the shipped configuration) or ``"bem_quick"`` (coarse, for tests).
+
+    Returns
+    -------
+    dict
+        ``body`` (:func:`body_from_case`), ``omega`` (:func:`frequencies`) and the table's
+        entries among :data:`BEM_KEYS` (``water_depth`` defaults to the environment's, else
+        infinite).
+    """
+    cfg = case.get(table)
+    if not isinstance(cfg, Mapping):
+        raise InputError(f"case {case.get('name', '?')!r} has no [{table}] table")
+    args = {k: cfg[k] for k in BEM_KEYS if k in cfg}
+    args.setdefault("water_depth", case.get("environment", {}).get("water_depth", math.inf))
+    if "dofs" in args:
+        args["dofs"] = tuple(args["dofs"])
+    return {"body": body_from_case(case), "omega": frequencies(cfg), **args}
+
+
 # ------------------------------------------------------------------------------ pieces
 def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float) -> RadiationSS:
     """The radiation state space ``cummins.simulate`` would fit itself (same tolerance),
@@ -95,8 +238,9 @@ def case_coefficients(case: Case, *, coeffs: str | os.PathLike | xr.Dataset | No
                       quick: bool = False, cache_dir: str | os.PathLike | None = None,
                       progress: bool = False) -> xr.Dataset:
     """The coefficients of a case: ``coeffs`` (a file or a Dataset) when given, else the BEM
-    solution of its ``[bem]`` table (``quick``: ``[bem_quick]``), which is the shipped file
-    without solving when the inputs match, else cached, else solved by Capytaine."""
+    solution of its ``[bem]`` table (``quick``: ``[bem_quick]``), ``compute(**bem_arguments
+    (case))``, which is the shipped file without solving when the inputs match (OC3-Hywind:
+    ``bem_oc3_hywind.nc``), else cached, else solved by Capytaine."""
     if isinstance(coeffs, xr.Dataset):
         return coeffs
     if coeffs is not None:
@@ -352,7 +496,7 @@ class CaseModel:
 
     @cached_property
     def body(self) -> Any:
-        """The case's body (:func:`hybridwsi.cases.body_from_case`)."""
+        """The case's body (:func:`body_from_case`)."""
         try:
             return body_from_case(self.case)
         except InputError as exc:

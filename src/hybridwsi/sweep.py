@@ -16,14 +16,16 @@ Two set-ups:
 
 - the paper sphere (no ``case``): heave only, the shipped or given coefficients, optionally the
   exact sphere buoyancy (:func:`cummins_case`);
-- a built-in case as data (``SweepConfig.for_case("oc3_hywind")``; :func:`case_sea`): the case's
-  coefficients (its ``[bem]`` table; the shipped file when the inputs match), DOFs (default the
-  case's ``default_dofs``) and force components (:func:`case_forces`: tabulated MoorPy mooring,
-  Morison drag with the wave particle velocity, additional linear damping, rotor), defaults from
-  the case's ``[sweep]`` table. Everything the cases share (coefficients, radiation state-space
-  fit, mooring table) is built ONCE on the client (:func:`case_setup`) and shipped to the
-  workers (OC3: 0.43 MB, of which the table 0.31 MB, pickled and unpickled in ~3 ms;
-  tabulating costs 0.6-1.2 s of MoorPy solves).
+- a case, built-in or a TOML file (``SweepConfig.for_case("oc3_hywind")``; :func:`case_sea`):
+  the case's coefficients (its ``[bem]`` table; the shipped file when the inputs match), DOFs
+  (default the case's ``default_dofs``) and force components, each recorded in the history
+  with the line tensions (:mod:`hybridwsi.casemodel`: the mooring as the case's model or
+  ``mooring``, Morison drag with the wave particle velocity, additional linear damping,
+  rotor), defaults from the case's ``[sweep]`` table. Everything the seas share
+  (coefficients, radiation state-space fit, mooring table) is one
+  :class:`~hybridwsi.casemodel.CaseModel` built ONCE on the client (:func:`case_setup`) and
+  shipped to the workers (OC3: 0.43 MB, of which the table 0.31 MB, pickled and unpickled in
+  ~3 ms; tabulating costs 0.6-1.2 s of MoorPy solves).
 
 Runners are plain top-level functions ``runner(case: dict, config: dict) -> TimeHistory`` so
 that they pickle to workers; :func:`default_runner` picks one from the configuration. The
@@ -327,8 +329,8 @@ def settings(config: SweepConfig, runner: Runner | None = None, shared: dict | N
 
     With a case also (:func:`case_settings`): the SHA-256 of the case's content, the
     coefficients' input hash, the DOFs simulated, every force component (its description) and
-    the mooring table's input hash. ``shared``: :func:`case_setup` of ``config`` if already
-    built (else built here, ~3 s for OC3-Hywind).
+    the mooring model and table's input hash. ``shared``: :func:`case_setup` of ``config`` if
+    already built (else built here, ~3 s for OC3-Hywind).
     """
     runner = default_runner(config) if runner is None else runner
     cfg = asdict(config)

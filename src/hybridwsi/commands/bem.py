@@ -112,9 +112,10 @@ def read_body(spec: str):
 
 def problem(args: argparse.Namespace) -> dict:
     """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` from the options: a case's
-    (:func:`hybridwsi.cases.bem_arguments`) or the body/frequency options (paper defaults)."""
+    (:func:`hybridwsi.casemodel.bem_arguments`) or the body/frequency options (paper defaults)."""
     from hybridwsi.bodies import FloatingSphere
-    from hybridwsi.cases import bem_arguments, load_case
+    from hybridwsi.casemodel import bem_arguments
+    from hybridwsi.cases import load_case
     from hybridwsi.errors import InputError
 
     if args.case is not None:

@@ -33,7 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from hybridwsi.casemodel import linear_components, mooring_component
+from hybridwsi.casemodel import case_coefficients, linear_components, mooring_component
 from hybridwsi.cases import load_case
 from hybridwsi.cummins import simulate
 from hybridwsi.dofs import RIGID_DOFS, index, motion_unit
@@ -59,9 +59,10 @@ RAO_HEIGHT = 1.0  # m: linear system, the height only scales the response
 
 def oc3_coefficients(case: dict[str, Any] | None = None, cache_dir: Path | None = None
                      ) -> xr.Dataset:
-    """The OC3-Hywind coefficients (:func:`hybridwsi.hydro.bem.case_coefficients`: the shipped
+    """The OC3-Hywind coefficients (:func:`hybridwsi.casemodel.case_coefficients`: the shipped
     file when the inputs match)."""
-    return bem.case_coefficients(load_case("oc3_hywind") if case is None else case, cache_dir)
+    return case_coefficients(load_case("oc3_hywind") if case is None else case,
+                             cache_dir=cache_dir)
 
 
 def mooring_summary(case: dict[str, Any], system: MooringSystem | None = None
