@@ -12,13 +12,12 @@ import pytest
 
 from hybridwsi import casemodel, waves
 from hybridwsi.casemodel import CaseModel, case_components, linear_components
-from hybridwsi.cases import case_path, load_case
+from hybridwsi.cases import case_path, from_dict, load_case, raw_case
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
 from hybridwsi.files import read_netcdf
 from hybridwsi.forces import Hydrostatic, LinearDamping, MooringForce, MorisonDrag
 from hybridwsi.forces.mooring import LineTensions, MooringSystem, QuasiStaticMooring
-from hybridwsi.hydro import coefficients as cf
 
 pytest.importorskip("moorpy")
 
@@ -112,10 +111,17 @@ def test_quasi_static_mooring_equals_the_table_to_its_interpolation_error(oc3, m
     assert isinstance(qs.components()["mooring"], LineTensions)
 
 
-def test_moordyn_without_its_module_is_one_line(oc3, monkeypatch):
+def test_moordyn_without_its_module_is_one_line(tmp_path, monkeypatch):
+    folder = tmp_path / "spar"
+    folder.mkdir()
+    (folder / "lines.dat").write_text("MoorDyn v2 input\n")
+    raw = raw_case("oc3_hywind")
+    raw["mooring"]["moordyn_file"] = "lines.dat"
+    case = from_dict(raw, directory=folder)
+    assert case["mooring"]["moordyn_file"] == str((folder / "lines.dat").resolve())
     monkeypatch.setattr(casemodel, "MOORDYN_MODULE", "hybridwsi.forces.no_such_module")
     with pytest.raises(InputError, match="MoorDyn mooring component .* not available"):
-        CaseModel.build(oc3, mooring="moordyn").components(dt=0.1)
+        case_components(case, DOFS, mooring="moordyn", dt=0.1)
 
 
 def test_a_user_sphere_case_with_a_force_table(tmp_path):
@@ -132,8 +138,7 @@ def test_a_user_sphere_case_with_a_force_table(tmp_path):
     assert main(["simulate", "--case", str(folder / "pushed.toml"), "--out", str(out),
                  "--quiet"]) == 0
     hist = read_netcdf(out)
-    c = cf.matrix(CaseModel.build(folder / "pushed.toml").coeffs, "hydrostatic_stiffness",
-                  ["Heave"])[0, 0]
+    c = float(hist["hydrostatic_stiffness"].values[0, 0])  # the coefficients' C [N/m]
     assert float(hist["time"][-1]) == 15.0
     assert hist["F_external"].values[-1, 0] == pytest.approx(10.0)
     assert hist["z"].values[-1, 0] == pytest.approx(10.0 / c, rel=1e-2)

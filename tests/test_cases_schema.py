@@ -107,6 +107,8 @@ BROKEN: dict[str, tuple[str, tuple[str, ...]]] = {
                              ("forces.morison", "no [hydrodynamics] drag_cd")),
     "mooring-model-unknown": (OC3_TEXT + '\n[forces]\nmooring = "elastic"\n',
                               ("forces.mooring", "'elastic'")),
+    "moordyn-without-input": (OC3_TEXT + '\n[forces]\nmooring = "moordyn"\n',
+                              ("forces.mooring", "needs [mooring] moordyn_file")),
     "mooring-without-table": (SPHERE_TEXT + '[forces]\nmooring = "table"\n',
                               ("forces.mooring", "no [mooring] table")),
     "convolution-nonlinear": (SPHERE_TEXT + '[forces]\nhydrostatics = "nonlinear"\n'
@@ -254,7 +256,12 @@ def test_forces_table_is_resolved_and_mooring_model_overridden():
                              "excitation": True, "mooring": "table", "morison": True,
                              "rotor": True, "linear_damping": True, "external_force": False}
     assert sphere["forces"]["mooring"] == "none" and not sphere["forces"]["morison"]
-    assert mooring_model(oc3) == "table" and mooring_model(oc3, "moordyn") == "moordyn"
+    assert mooring_model(oc3) == "table"
+    assert mooring_model(oc3, "quasi-static") == "quasi-static"
+    raw = raw_case("oc3_hywind")
+    raw["mooring"].pop("moordyn_file", None)
+    with pytest.raises(InputError, match="no moordyn_file"):
+        mooring_model(from_dict(raw), "moordyn")
     with pytest.raises(InputError, match="no \\[mooring\\] table"):
         mooring_model(sphere, "table")
     assert isinstance(CASE, Table) and json.dumps(oc3)  # plain values only

@@ -157,4 +157,7 @@ def mooring_model(case: Mapping[str, Any], override: str | None = None) -> str:
                          f"{override!r}")
     if "mooring" not in case:
         raise InputError(f"--mooring {override}: the case has no [mooring] table")
+    if override == "moordyn" and "moordyn_file" not in case["mooring"]:
+        raise InputError("--mooring moordyn: the case's [mooring] has no moordyn_file (the "
+                         "MoorDyn v2 input)")
     return override

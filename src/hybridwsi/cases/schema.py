@@ -528,8 +528,8 @@ _MOORING = Table(fields={
     "weight_in_water": positive("N/m", "apparent weight per length", required=True),
     "EA": positive("N", "extensional stiffness", required=True),
     "yaw_spring": nonnegative("N m/rad", "additional linear yaw stiffness", default=0.0),
-    "moordyn_input": FilePath(what="MoorDyn input file",
-                              doc="the MoorDyn v2 input of the same system"),
+    "moordyn_file": FilePath(what="MoorDyn input file",
+                              doc="the MoorDyn v2 input of the same lines (forces/moordyn.py)"),
     "table": Table(fields={**_DOF_BOX, "spacing": positive("m", "grid step in (l_h, l_v)")},
                    doc="tabulation box of the interpolant: half-width per DOF"),
     "reference": Table(fields={
@@ -670,6 +670,9 @@ def _resolve_forces(case: dict[str, Any], ctx: Context) -> None:
         on = forces[key] != "none" if key == "mooring" else forces[key]
         if on and not have:
             raise ctx.fail(("forces", key), f"is on but the case has no {what}")
+    if forces["mooring"] == "moordyn" and "moordyn_file" not in case["mooring"]:
+        raise ctx.fail(("forces", "mooring"), "'moordyn' needs [mooring] moordyn_file (the "
+                                              "MoorDyn v2 input)")
     if forces["hydrostatics"] == "nonlinear" and forces["radiation"] == "convolution":
         raise ctx.fail(("forces", "radiation"), "'convolution' works with linear hydrostatics "
                                                 "only; use 'statespace'")
