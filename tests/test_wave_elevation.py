@@ -73,8 +73,8 @@ def test_response_to_a_recorded_regular_wave_is_the_frequency_domain_one(sphere)
     (measured 1.6e-4 at dt = 0.01 s; the time integration's error is O(dt²): 1.1e-3 at 0.02)."""
     period, height, dt = 1.0, 0.05, 0.01
     w = 2.0 * np.pi / period
-    t, rec = _record(waves.Regular(period=period, height=height), 30.0, dt, sphere)
-    hist = cummins.simulate(sphere, duration=24.0, dt=dt, wave=rec, ramp=3.0)
+    t, rec = _record(waves.Regular(period=period, height=height), 20.0, dt, sphere)
+    hist = cummins.simulate(sphere, duration=16.0, dt=dt, wave=rec, ramp=3.0)
     m = cf.matrix(sphere, "mass", ["Heave"])[0, 0]
     a = cf.at_frequency(sphere, "added_mass", w, ["Heave"])[0, 0]
     b = cf.at_frequency(sphere, "radiation_damping", w, ["Heave"])[0, 0]
@@ -84,7 +84,7 @@ def test_response_to_a_recorded_regular_wave_is_the_frequency_domain_one(sphere)
              + 1j * np.interp(w, sphere["omega"].values, fe.imag))
     x_fd = f_hat * height / 2 / (c - w**2 * (m + a) - 1j * w * b)
     tt = hist["time"].values
-    win = tt >= 14.0  # ten periods, the start transient gone
+    win = tt >= 10.0  # six periods, the start transient gone
     basis = np.column_stack([np.cos(w * tt[win]), np.sin(w * tt[win]), np.ones(win.sum())])
     coef, *_ = np.linalg.lstsq(basis, hist["z"].values[win, 0], rcond=None)
     x_td = coef[0] + 1j * coef[1]  # z = Re(X e^{-iωt}) = Re X cos ωt + Im X sin ωt
@@ -94,12 +94,12 @@ def test_response_to_a_recorded_regular_wave_is_the_frequency_domain_one(sphere)
 def test_simulate_wave_elevation_equals_regular_after_the_ramp(sphere, tmp_path):
     """The command line: --wave-elevation of a CSV holding the regular wave's elevation
     (in mm, longer than the run) gives --regular's force and motion after the ramp."""
-    t = np.arange(0.0, 25.0 + 1e-9, 0.02)
+    t = np.arange(0.0, 16.0 + 1e-9, 0.02)
     eta = waves.Regular(period=1.0, height=0.05).elevation(t)
     csv = tmp_path / "probe.csv"
     np.savetxt(csv, np.column_stack([t, 1e3 * eta]), delimiter=",", fmt="%.17g",
                header="time [s],eta [mm]", comments="")
-    common = ["simulate", "--coeffs", str(tmp_path / "sphere.nc"), "--duration", "20",
+    common = ["simulate", "--coeffs", str(tmp_path / "sphere.nc"), "--duration", "12",
               "--dt", "0.02", "--ramp", "3", "--quiet"]
     to_netcdf(sphere, tmp_path / "sphere.nc")
     assert main([*common, "--regular", "1.0", "0.05", "--out", str(tmp_path / "r.nc")]) == 0
