@@ -35,7 +35,7 @@ from typing import Any
 
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, is_rotation
 from hybridwsi.errors import InputError
-from hybridwsi.history.units import convert_unit, parse_unit
+from hybridwsi.history.units import convert_unit
 
 #: marks an optional key without a default
 MISSING: Any = object()

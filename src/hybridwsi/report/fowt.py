@@ -40,7 +40,6 @@ from hybridwsi.dofs import RIGID_DOFS, index, motion_unit
 from hybridwsi.files import atomic_write
 from hybridwsi.forces import KnownComponent, MooringSystem
 from hybridwsi.history import mean_crossing_period
-from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
 from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
