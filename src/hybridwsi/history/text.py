@@ -546,12 +546,7 @@ def read_csv(
     named = _named_force_columns(table, forces, dof_names)
     # only the columns asked for are parsed (all of them when the forces are not named)
     table.load(table.columns if named is None else [*used, *(c for cs in named.values() for c in cs)])
-    extra_vars, extra_coords = {}, {}
-    if eta_col:
-        probe = split_header(eta_col)[0]
-        extra_vars["eta"] = (("time", "probe"), table.numeric(eta_col, "length")[:, None],
-                             {"units": "m", "long_name": "wave elevation", "column": eta_col})
-        extra_coords["probe"] = [probe]
+    extra_vars, extra_coords = _eta_variable(table, eta_col)
     t = table.numeric(cols["time"][0], "time")
     table.check_time(t)
     kin = {r: _read_dofs(table, c, r, dof_names) for r, c in cols.items() if r != "time"}
@@ -568,7 +563,7 @@ def read_csv(
         inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
                 "sep": table.sep, **({"eta": eta_col} if eta_col else {}),
                 **({"ignored_columns": ignored} if ignored else {})},
-        check=False, extra_vars=extra_vars or None, extra_coords=extra_coords or None,
+        check=False, extra_vars=extra_vars, extra_coords=extra_coords,
     )
     for var, cs in extra_cols.items():
         units = [split_header(c)[1] or "" for c in cs]
@@ -583,6 +578,17 @@ def read_csv(
         warnings.warn(f"{table.path.name}: {ignored} of {len(table.columns)} columns ignored "
                       "(not the time, motion or named force columns)", UserWarning, stacklevel=2)
     return ds
+
+
+def _eta_variable(table: TextTable, column: str | None) -> tuple[dict | None, dict | None]:
+    """``eta(time, probe)`` [m] of the wave-elevation column (its unit-less name the probe),
+    as ``make_history``'s ``extra_vars`` and ``extra_coords``; ``(None, None)`` without one."""
+    if column is None:
+        return None, None
+    values = table.numeric(column, "length")[:, None]
+    return ({"eta": (("time", "probe"), values, {"units": "m", "long_name": "wave elevation",
+                                                 "column": column})},
+            {"probe": [split_header(column)[0]]})
 
 
 def _column_names(stem: str, dofs: Sequence[str]) -> list[str]:
