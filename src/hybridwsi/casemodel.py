@@ -394,16 +394,22 @@ def _tension_variables(comp: LineTensions, hist: xr.Dataset) -> dict[str, tuple]
             for var, (end, k) in where.items()}
 
 
+def component_variable(name: str) -> str:
+    """The TimeHistory variable of a component: :data:`COMPONENT_VARIABLES`, else ``F_<name>``
+    (a network component named ``network`` is recorded as ``F_network``)."""
+    return COMPONENT_VARIABLES.get(name, name if name.startswith("F_") else f"F_{name}")
+
+
 def record_components(hist: xr.Dataset, components: Mapping[str, KnownComponent]
                       ) -> xr.Dataset:
-    """``hist`` with each component's force (:data:`COMPONENT_VARIABLES`) and the mooring's
+    """``hist`` with each component's force (:func:`component_variable`) and the mooring's
     line tensions (``T_fairlead``, ``T_anchor``, coordinate ``line`` = 1…n) added.
 
     ``attrs["components_residual"]``: the largest ``|Σ F_k − F_ext|`` over the largest
     ``|F_ext|``; round-off when every component's ``force`` on the history is what entered the
     ODE (a warning says so when it exceeds 1e-6).
     """
-    new = {COMPONENT_VARIABLES[name]: _force_variable(comp, name, hist)
+    new = {component_variable(name): _force_variable(comp, name, hist)
            for name, comp in components.items()}
     coords = {}
     for comp in components.values():
@@ -524,8 +530,9 @@ class CaseModel:
     def simulate(self, *, duration: float, dt: float, wave: Wave | None = None,
                  z0: float | Sequence[float] = 0.0, zdot0: float | Sequence[float] = 0.0,
                  ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False,
-                 external_force: KnownComponent | None = None, radiation: str | None = None,
-                 hydrostatics: str | None = None) -> xr.Dataset:
+                 extra: Mapping[str, KnownComponent] | None = None,
+                 radiation: str | None = None, hydrostatics: str | None = None
+                 ) -> xr.Dataset:
         """One Cummins run of the case → TimeHistory with every component recorded.
 
         Parameters
@@ -540,9 +547,10 @@ class CaseModel:
             Half-cosine ramp [s] of the excitation and of the drag's wave velocity.
         wave_kinematics : bool
             The Morison drag sees the wave particle velocity.
-        external_force : KnownComponent, optional
-            A force table given besides the case (recorded as ``F_external``; not with a case
-            that has its own ``[external_force]``).
+        extra : mapping of name to KnownComponent, optional
+            Components besides the case's, recorded as :func:`component_variable` of their
+            name: ``{"external_force": force_table(...)}`` (``simulate --external-force``;
+            not with a case that has its own), ``{"network": ...}`` (``F_network``).
         radiation, hydrostatics : str, optional
             Instead of the case's ``[forces]`` models (``statespace``/``convolution``/``none``;
             ``linear``/``nonlinear``).
@@ -557,11 +565,11 @@ class CaseModel:
                   **({"radiation": radiation} if radiation else {}),
                   **({"hydrostatics": hydrostatics} if hydrostatics else {})}
         comps = self.components(wave=wave if wave_kinematics else None, ramp=ramp, dt=dt)
-        if external_force is not None:
-            if "external_force" in comps:
-                raise InputError(f"{self.case.label} has its own [external_force]; give one "
-                                 "force table, not two")
-            comps["external_force"] = external_force
+        for name, comp in (extra or {}).items():
+            if name in comps:
+                raise InputError(f"{self.case.label} has its own {name} component; give it "
+                                 "once")
+            comps[name] = comp
         nonlinear = forces["hydrostatics"] == "nonlinear"
         excite = wave if forces["excitation"] else None
         ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)

@@ -211,10 +211,11 @@ def _run_case(args: argparse.Namespace) -> xr.Dataset:
     duration, dt, ramp = _timing(args, wave, defaults)
     o.check_steps(duration, dt, len(model.dofs))
     _check_decay(args.decay, model.dofs)
-    extra = force_table(args.external_force, model.dofs) if args.external_force else None
+    extra = ({"external_force": force_table(args.external_force, model.dofs)}
+             if args.external_force else None)
     return model.simulate(
         duration=duration, dt=dt, wave=wave, z0=args.decay, ramp=ramp,
-        wave_kinematics=args.wave_kinematics, progress=not args.quiet, external_force=extra,
+        wave_kinematics=args.wave_kinematics, progress=not args.quiet, extra=extra,
         radiation=args.radiation,
         hydrostatics="nonlinear" if args.nonlinear_hydrostatics else None)
 
