@@ -96,8 +96,10 @@ def test_errors():
         def ode_force(self, t, z, zd, x):
             return np.full(1, np.nan)
 
-    with pytest.raises(SolverError):
-        reconstruct(hist, known=[Bad()])
+    bad = reconstruct(hist, known=[Bad()])  # a failed integration is data, not an exception
+    assert not bad.success and bad.history is None and bad.metrics["nrms_error"] == [math.inf]
+    with pytest.raises(SolverError, match="reconstruction"):
+        bad.solution.raise_on_failure()
     other = regress(hist)  # α = m: moving it leaves no inertia
     with pytest.raises(InputError, match="singular"):
         reconstruct(hist, move_identified=other)

@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from hybridwsi.errors import HybridWSIError, InputError
+from hybridwsi.errors import InputError
 from hybridwsi.forces import (
     KnownComponent,
     LinearDamping,
@@ -159,15 +159,17 @@ def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
 
 
 def _reconstruction_error(hist, known, m) -> float:
+    """Largest normalised RMS error of the reconstruction; inf when it fails (its result
+    says so) or when this partition's ODE cannot be set up (singular m + A_k)."""
     from hybridwsi.diagnostic.reconstruct import reconstruct
 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = reconstruct(hist, "F_tot", known, mass=m)
-        return float(np.max(res.metrics["nrms_error"]))
-    except HybridWSIError:  # a diverging reconstruction is a result, not a crash
+    except InputError:
         return float("inf")
+    return float(np.max(res.metrics["nrms_error"])) if res.success else float("inf")
 
 
 def select_partition(

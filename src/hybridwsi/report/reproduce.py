@@ -139,6 +139,12 @@ def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
     }
 
 
+def _solved(res: Any) -> Any:
+    """A reconstruction that succeeded (its failure, data until here, stops the report)."""
+    res.solution.raise_on_failure()
+    return res
+
+
 def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Path,
             title: str, stem: str, motion_force: str | None = "F_rad_mem",
             bias_fraction: float = 1e-4, force_accuracy: float = 0.01) -> dict[str, Any]:
@@ -174,15 +180,15 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     biased = hist.assign(F_tot=hist["F_tot"] + bias)
     recs, moved, verdicts, metrics = {}, {}, {}, {}
     for k, case in cases.items():
-        r = reconstruct(hist, force="F_tot", known=case.known, mass=mass)
-        rb = reconstruct(biased, force="F_tot", known=case.known, mass=mass)
+        r = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass))
+        rb = _solved(reconstruct(biased, force="F_tot", known=case.known, mass=mass))
         recs[k], verdicts[k] = rb.history, r.stability.verdict
         metrics[k] = {"prescribed": r.to_dict(), "prescribed_biased": rb.to_dict()}
         if ident is not None:
-            rm = reconstruct(hist, force="F_tot", known=case.known, mass=mass,
-                             move_identified=ident)
-            rmb = reconstruct(biased, force="F_tot", known=case.known, mass=mass,
-                              move_identified=ident)
+            rm = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass,
+                                     move_identified=ident))
+            rmb = _solved(reconstruct(biased, force="F_tot", known=case.known, mass=mass,
+                                      move_identified=ident))
             moved[k] = rmb.history
             metrics[k]["moved_identified"] = rm.to_dict()
             metrics[k]["moved_identified_biased"] = rmb.to_dict()
