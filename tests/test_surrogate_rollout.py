@@ -76,8 +76,9 @@ def test_predicted_map_matches_stability_module(alpha, beta, gamma):
     case = _decay_case(0.01, dt, 0.2)
     net = _linear_net(alpha, beta, gamma, case)
     pred = check_stability(net, case, mass=M, known=[Hydrostatic(C)], dt=dt, mode="lagged")
-    ref = stability.loosely_coupled_stability(M, 0.0, 0.0, C, alpha, beta, gamma, dt, "newmark")
-    assert pred.spectral_radius == pytest.approx(ref.spectral_radius, rel=1e-9)
+    ref = stability.assess(stability.CoupledStep(M, 0.0, 0.0, C, alpha, beta, gamma, dt=dt))
+    assert pred.spectral_radius == pytest.approx(ref.loosely_coupled.spectral_radius, rel=1e-9)
+    assert pred.loosely_coupled.spectral_radius == ref.loosely_coupled.spectral_radius
     assert pred.added_mass_ratio == pytest.approx(abs(alpha) / M, rel=1e-9)
 
 

@@ -42,6 +42,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi.diagnostic.stability import CoupledStep, assess
 from hybridwsi.errors import InputError
 from hybridwsi.forces import (
     KnownComponent,
@@ -49,7 +50,6 @@ from hybridwsi.forces import (
     QuadraticDamping,
     RadiationMemory,
     as_matrix,
-    summed_linear_coefficients,
 )
 from hybridwsi.forces.external import PrescribedForce
 from hybridwsi.forces.linear import has_known, known_from, mass_from
@@ -139,22 +139,17 @@ def enumerate_partitions(names: Sequence[str]) -> list[tuple[str, ...]]:
 
 
 def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
-    from hybridwsi.diagnostic import stability
-
-    n = m.shape[0]
-    a_k, b_k, c_k = summed_linear_coefficients(known, n)
-    rep_a = stability.prescribed_force_stability(m, a_k, b_k, c_k)
-    rep_b = stability.surrogate_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta, reg.gamma)
-    rep_c = stability.loosely_coupled_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta,
-                                                reg.gamma, dt, scheme)
+    """The partition's stability (:func:`~hybridwsi.diagnostic.stability.assess`) as table
+    columns; feasible: stable in the continuous loop and strictly stable lagged at ``dt``."""
+    rep = assess(CoupledStep.from_components(m, known, reg, dt=dt, scheme=scheme))
     return {
-        "prescribed_verdict": rep_a.verdict,
-        "surrogate_verdict": rep_b.verdict,
-        "loosely_coupled_verdict": rep_c.verdict,
-        "spectral_radius": rep_c.spectral_radius,
-        "max_stable_dt": rep_c.max_stable_dt,
-        "added_mass_ratio": rep_c.conditions.get("added_mass_ratio"),
-        "feasible": bool(rep_b.stable and rep_c.verdict == "stable"),
+        "prescribed_verdict": rep.prescribed.verdict,
+        "surrogate_verdict": rep.continuous.verdict,
+        "loosely_coupled_verdict": rep.loosely_coupled.verdict,
+        "spectral_radius": rep.spectral_radius,
+        "max_stable_dt": rep.max_stable_dt,
+        "added_mass_ratio": rep.added_mass_ratio,
+        "feasible": bool(rep.continuous_stable and rep.loosely_coupled.verdict == "stable"),
     }
 
 

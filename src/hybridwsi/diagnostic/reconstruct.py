@@ -36,7 +36,7 @@ from hybridwsi.forces import (
 from hybridwsi.forces.linear import mass_from
 from hybridwsi.diagnostic.regression import RegressionResult, as_components, kinematics
 from hybridwsi.cummins.result import SolverResult, failure, first_non_finite
-from hybridwsi.diagnostic.stability import StabilityReport, prescribed_force_stability
+from hybridwsi.diagnostic.stability import CoupledStep, StabilityReport, assess
 from hybridwsi.errors import InputError
 from hybridwsi.history import make_history, time_step, validate
 
@@ -56,7 +56,8 @@ class ReconstructionResult:
         Per DOF: ``rms_error`` [m], ``max_error`` [m], ``nrms_error`` (RMS error / std of z_ref),
         ``final_drift`` [m] (error at the last sample); inf when the integration failed.
     stability : StabilityReport
-        Setting (a) for the ODE actually integrated (known part plus moved terms).
+        The ODE actually integrated (known part plus moved terms, the rest prescribed):
+        its setting (a), ``stability.prescribed``, is the reconstruction's error dynamics.
     solution : SolverResult
         The integrator's result: ``success``, ``message``, ``nfev`` (right-hand-side
         evaluations), the solution (:mod:`hybridwsi.cummins.result`).
@@ -78,7 +79,7 @@ class ReconstructionResult:
         """JSON-ready summary (metrics, stability, solver info; not the time series)."""
         return {
             "metrics": self.metrics,
-            "stability": self.stability.to_dict(),
+            "stability": self.stability.prescribed.to_dict(),
             "solver_message": self.solution.message,
             "n_rhs_evals": self.solution.nfev,
             "inputs": self.inputs,
@@ -213,7 +214,7 @@ def reconstruct(
         "reference": {"source": hist.attrs.get("source", ""),
                       "inputs": hist.attrs.get("inputs", "{}")},
     }
-    stab = prescribed_force_stability(m, ode.a_k - alpha, ode.b_k - beta, ode.c_k - gamma)
+    stab = assess(CoupledStep(m, ode.a_k - alpha, ode.b_k - beta, ode.c_k - gamma))
     if not sol.success:
         inf = [math.inf] * z_ref.shape[1]
         metrics = {"rms_error": inf, "max_error": inf, "nrms_error": inf, "final_drift": inf}

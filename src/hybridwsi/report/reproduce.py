@@ -182,7 +182,7 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     for k, case in cases.items():
         r = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass))
         rb = _solved(reconstruct(biased, force="F_tot", known=case.known, mass=mass))
-        recs[k], verdicts[k] = rb.history, r.stability.verdict
+        recs[k], verdicts[k] = rb.history, r.stability.prescribed.verdict
         metrics[k] = {"prescribed": r.to_dict(), "prescribed_biased": rb.to_dict()}
         if ident is not None:
             rm = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass,

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -50,7 +50,7 @@ import xarray as xr
 from hybridwsi.cummins.result import SolverResult
 from hybridwsi.diagnostic import stability
 from hybridwsi.errors import InputError, SolverError
-from hybridwsi.forces import KnownComponent, as_matrix, summed_linear_coefficients
+from hybridwsi.forces import KnownComponent
 from hybridwsi.history import make_history, time_step
 from hybridwsi.surrogate import fast
 from hybridwsi.surrogate.coupled import (
@@ -68,8 +68,8 @@ from hybridwsi.surrogate.linearise import feature_jacobian, linearise
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.physics import BatchedPhysics, initial_states
 
-__all__ = ["BLOWUP_FACTOR", "MODES", "SAWTOOTH_RATIO", "RolloutResult", "StabilityPrediction",
-           "UnstablePartitionError", "check_stability", "corrections_for", "rollout"]
+__all__ = ["BLOWUP_FACTOR", "MODES", "SAWTOOTH_RATIO", "RolloutResult", "UnstablePartitionError",
+           "check_stability", "corrections_for", "rollout"]
 
 #: rms of the second difference of z̈ above this fraction of the reference rms z̈ is the
 #: saw-tooth (period 2Δt) mode of an unstable lagged coupling, bounded only by the saturating
@@ -90,49 +90,6 @@ class UnstablePartitionError(SolverError):
 
 
 # ------------------------------------------------------------------- stability prediction
-@dataclass
-class StabilityPrediction:
-    """Predicted stability of a hybrid rollout.
-
-    Attributes
-    ----------
-    spectral_radius : float
-        Of the linearised one-step map (network replaced by its averaged feature Jacobian,
-        all lags included) of the very scheme the rollout uses.
-    stable : bool
-        ``spectral_radius <= 1 + tol`` (and, for ``implicit``, a contracting fixed point).
-    alpha_s, beta_s, gamma_s : ndarray
-        Averaged lag-0 sensitivities of the network (docs/THEORY.md §4b).
-    added_mass_ratio : float
-        ``max |eig((m + A_k)^{-1} alpha_s)|``: >= 1 is the loosely coupled added-mass
-        instability (docs/THEORY.md §4c), and for ``implicit`` the fixed point diverges.
-    continuous_stable : bool
-        Setting (b) of :func:`hybridwsi.diagnostic.stability.surrogate_stability` (the one
-        continuous test: generalised eigenvalues of ``(m + A_k − α_s, B_k − β_s, C_k − γ_s)``).
-    theory : dict
-        Reports (b) ``surrogate`` and (c) ``loosely_coupled`` of
-        :mod:`hybridwsi.diagnostic.stability` as dicts.
-    """
-
-    mode: str
-    dt: float
-    spectral_radius: float
-    stable: bool
-    alpha_s: np.ndarray
-    beta_s: np.ndarray
-    gamma_s: np.ndarray
-    added_mass_ratio: float
-    continuous_stable: bool
-    theory: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"mode": self.mode, "dt": self.dt, "spectral_radius": self.spectral_radius,
-                "stable": bool(self.stable), "alpha_s": self.alpha_s.tolist(),
-                "beta_s": self.beta_s.tolist(), "gamma_s": self.gamma_s.tolist(),
-                "added_mass_ratio": self.added_mass_ratio,
-                "continuous_stable": bool(self.continuous_stable), "theory": self.theory}
-
-
 def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarray,
                 scheme: str = "newmark", corrections: int = 1) -> np.ndarray:
     """Matrix of the one-step map on (z, v, a, x, buffer lags 0..w-2) for a linear network
@@ -170,7 +127,7 @@ def check_stability(
     tol: float = 1e-6,
     stride: int = 5,
     corrections: int = 1,
-) -> StabilityPrediction:
+) -> stability.StabilityReport:
     """Predict whether the hybrid rollout is stable, from the network's linearisation.
 
     Parameters
@@ -194,34 +151,35 @@ def check_stability(
         Every ``stride``-th reference sample is a linearisation state.
     corrections : int
         Predictor-corrector passes of the ``corrected`` mode.
+
+    Returns
+    -------
+    StabilityReport
+        ``spectral_radius`` of the rollout's one-step map with the network replaced by its
+        averaged feature Jacobian (all lags), ``stable`` (≤ 1 + ``tol``, and for ``implicit``
+        a contracting fixed point), ``added_mass_ratio``, the network's averaged lag-0
+        sensitivities in ``step.alpha, beta, gamma``, settings (b) ``continuous`` and (c)
+        ``loosely_coupled`` of :func:`hybridwsi.diagnostic.stability.assess`.
     """
     refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
     dt = float(dt if dt is not None else time_step(refs[0]))
-    nd = net.n_dof_
-    phys = BatchedPhysics(mass, known, nd)
-    lin_phys = phys.linearised()
+    phys = BatchedPhysics(mass, known, net.n_dof_)
     from hybridwsi.surrogate.features import build_features
 
     x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
     jac = feature_jacobian(net, x).mean(0)
-    step_map = _linear_map(lin_phys, net.spec_, dt, mode, jac, scheme, corrections)
-    rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
+    step_map = _linear_map(phys.linearised(), net.spec_, dt, mode, jac, scheme, corrections)
     lin = linearise(net, refs[0], stride=stride)
     if len(refs) > 1:
         lins = [linearise(net, h, stride=stride) for h in refs]
         lin.alpha, lin.beta, lin.gamma = (np.mean([getattr(s, k) for s in lins], 0)
                                           for k in ("alpha", "beta", "gamma"))
-    a_k, b_k, c_k = summed_linear_coefficients(list(known), nd)
-    m = as_matrix(mass, nd, "mass")
-    ratio = stability.added_mass_ratio(m, a_k, lin.alpha)
-    stable = rho <= 1.0 + tol and (mode != "implicit" or ratio < 1.0)
-    # docs/THEORY.md §4b-c for the network's lag-0 sensitivities: (b) is the continuous test
-    cont = stability.surrogate_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta, lin.gamma)
-    lagged = stability.loosely_coupled_stability(m, a_k, b_k, c_k, lin.alpha, lin.beta,
-                                                 lin.gamma, dt, scheme)
-    theory = {"surrogate": cont.to_dict(), "loosely_coupled": lagged.to_dict()}
-    return StabilityPrediction(mode, dt, rho, bool(stable), lin.alpha, lin.beta, lin.gamma,
-                               ratio, cont.stable, theory)
+    # docs/THEORY.md §4b-c for the network's lag-0 sensitivities, with the spectral radius of
+    # the rollout's own map (every lag)
+    step = stability.CoupledStep.from_components(
+        mass, known, lin, dt=dt, scheme=scheme, mode=mode,
+        corrections=corrections if mode == "corrected" else 0)
+    return stability.assess(step, step_map=step_map, rho_tol=tol)
 
 
 # ---------------------------------------------------------------------------------- rollout
@@ -235,8 +193,8 @@ class RolloutResult:
     ----------
     histories : list of TimeHistory
         One per case, with ``F_net`` (network force) and ``F_known`` (known force) [N].
-    prediction : StabilityPrediction or None
-        :func:`check_stability` before the run.
+    prediction : StabilityReport or None
+        :func:`check_stability` before the run (:mod:`hybridwsi.diagnostic.stability`).
     solution : SolverResult
         The coupled integration (:func:`hybridwsi.surrogate.coupled.solve_coupled`): ``failed``
         per case, network evaluations ``nfev``, ``counts["iterations"]`` per step.
@@ -245,7 +203,7 @@ class RolloutResult:
     """
 
     histories: list[xr.Dataset]
-    prediction: StabilityPrediction | None
+    prediction: stability.StabilityReport | None
     solution: SolverResult
     sawtooth: np.ndarray
 
@@ -388,7 +346,7 @@ def rollout(
     return RolloutResult(_histories(net, hs, sol, mass, mode, known), prediction, sol, saw)
 
 
-def _refuse_unstable(prediction: StabilityPrediction, mode: str, force: bool) -> None:
+def _refuse_unstable(prediction: stability.StabilityReport, mode: str, force: bool) -> None:
     """:class:`UnstablePartitionError` for a partition predicted unstable (a warning with
     ``force``)."""
     if prediction.stable:
