@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg
 import xarray as xr
 
+from hybridwsi._meta import version as _version
 from hybridwsi.cummins.forcing import (
     as_wave,
     excitation,
@@ -65,28 +66,15 @@ def _vector(value: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-def simulate(
-    coeffs: xr.Dataset,
-    *,
-    mass: float | np.ndarray | None = None,
-    body: Any = None,
-    dofs: Sequence[str] = ("Heave",),
-    duration: float,
-    dt: float,
-    wave: Wave | Mapping | None = None,
-    z0: float | Sequence[float] = 0.0,
-    zdot0: float | Sequence[float] = 0.0,
-    forces: Sequence[KnownComponent] = (),
-    radiation: str = "statespace",
-    nonlinear_hydrostatics: bool = False,
-    ramp: float = 0.0,
-    irf: xr.DataArray | None = None,
-    radiation_ss: RadiationSS | None = None,
-    ss_order: int | None = None,
-    ss_tol: float = 0.005,
-    irf_t_max: float | None = None,
-    progress: bool = False,
-) -> xr.Dataset:
+def simulate(coeffs: xr.Dataset, *, mass: float | np.ndarray | None = None, body: Any = None,
+             dofs: Sequence[str] = ("Heave",), duration: float, dt: float,
+             wave: Wave | Mapping | None = None, z0: float | Sequence[float] = 0.0,
+             zdot0: float | Sequence[float] = 0.0, forces: Sequence[KnownComponent] = (),
+             radiation: str = "statespace", nonlinear_hydrostatics: bool = False,
+             ramp: float = 0.0, irf: xr.DataArray | None = None,
+             radiation_ss: RadiationSS | None = None, ss_order: int | None = None,
+             ss_tol: float = 0.005, irf_t_max: float | None = None, progress: bool = False
+             ) -> xr.Dataset:
     """Integrate the Cummins equation and return a TimeHistory.
 
     Parameters
@@ -122,15 +110,10 @@ def simulate(
         the DOFs the body can do exactly, linear ``−C z`` on the others (RK4 solver).
     ramp : float
         Duration [s] of the half-cosine ramp on the wave excitation.
-    irf : xarray.DataArray, optional
-        Precomputed kernel K(time, radiating_dof, influenced_dof); default from ``coeffs``.
-    radiation_ss : RadiationSS, optional
-        Precomputed state-space model (skips the fit).
-    ss_order, ss_tol : int, float
-        Passed to :func:`~hybridwsi.hydro.statespace.fit_radiation_ss` (default tolerance
-        0.5 %: a higher order costs almost nothing here and keeps the RAO error < 0.5 %).
-    irf_t_max : float, optional
-        Kernel length [s] passed to ``radiation_irf``.
+    irf, radiation_ss, ss_order, ss_tol, irf_t_max
+        Precomputed kernel K [N/m/s per DOF pair] or state-space model, and the fit's options
+        (:func:`~hybridwsi.cummins.system.build_system`; default tolerance 0.5 %: a higher
+        order costs almost nothing here and keeps the RAO error < 0.5 %).
     progress : bool
         Show a tqdm progress bar for the stepping solvers.
 
@@ -154,12 +137,7 @@ def simulate(
     f_ext = time_forcing(timed, t, sys.n)
     options, extra_mass = _state_options(integ, sys, body if nonlinear_hydrostatics else None,
                                          stateful)
-    if integ.half_steps:  # the forcing at the steps and their midpoints (RK4 stages)
-        t_half = np.arange(2 * t.size - 1) * (dt / 2)
-        u = excitation(wave, coeffs, t_half, sys.dofs, ramp)[0]
-        u += time_forcing(timed, t_half, sys.n)
-    else:
-        u = f_exc + f_ext
+    u = _solver_forcing(integ, wave, coeffs, timed, t, sys, ramp, f_exc, f_ext)
     sol = integ.solve(sys, u, z0v, v0v, dt, progress=progress, **options).raise_on_failure()
     if "F_components" in sol.forces:  # the state-dependent components' force
         f_ext = f_ext + sol.forces["F_components"]
@@ -185,6 +163,19 @@ def _state_options(integ: CumminsIntegrator, sys: CumminsSystem, body: Any,
         meff = meff + extra_mass
     return {"restoring": None if hs is None else hs.restoring, "components": stateful,
             "meff": meff}, extra_mass
+
+
+def _solver_forcing(integ: CumminsIntegrator, wave: Wave | None, coeffs: xr.Dataset,
+                    timed: Sequence[KnownComponent], t: np.ndarray, sys: CumminsSystem,
+                    ramp: float, f_exc: np.ndarray, f_ext: np.ndarray) -> np.ndarray:
+    """The time-only force [N, N m] on the integrator's grid: the output grid (``f_exc +
+    f_ext``), or the steps and their midpoints for RK4's stages (evaluated there)."""
+    if not integ.half_steps:
+        return f_exc + f_ext
+    t_half = np.arange(2 * t.size - 1) * ((t[1] - t[0]) / 2)  # t[1] − t[0] is dt exactly
+    u = excitation(wave, coeffs, t_half, sys.dofs, ramp)[0]
+    u += time_forcing(timed, t_half, sys.n)
+    return u
 
 
 def _restoring_force(sys: CumminsSystem, sol: SolverResult) -> np.ndarray:
@@ -375,8 +366,6 @@ def simulate_batch(
     data.update(_matrix_vars(sys))
     if any(d["wave"] is not None for d in described):
         data["eta"] = (("case", "time"), eta, {"units": "m"})
-    from hybridwsi._meta import version as _version
-
     out = xr.Dataset(
         data,
         coords={"case": np.arange(len(cases)), "time": ("time", t, {"units": "s"}),

@@ -42,6 +42,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi.diagnostic.reconstruct import reconstruct
+from hybridwsi.diagnostic.regression import regress
 from hybridwsi.diagnostic.stability import CoupledStep, assess
 from hybridwsi.errors import InputError
 from hybridwsi.forces import (
@@ -156,8 +158,6 @@ def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
 def _reconstruction_error(hist, known, m) -> float:
     """Largest normalised RMS error of the reconstruction; inf when it fails (its result
     says so) or when this partition's ODE cannot be set up (singular m + A_k)."""
-    from hybridwsi.diagnostic.reconstruct import reconstruct
-
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -216,8 +216,6 @@ def select_partition(
         ``condition_number``, ``identifiable``, verdicts of (a)-(c), ``spectral_radius``,
         ``max_stable_dt``, ``added_mass_ratio``, ``recon_nrms``, ``feasible``, ``score``.
     """
-    from hybridwsi.diagnostic.regression import regress
-
     validate(hist)
     n = hist.sizes["dof"]
     m = mass if mass is not None else mass_from(hist, coeffs)
@@ -229,35 +227,42 @@ def select_partition(
         raise InputError(f"dt must be positive, got {dt}")
     avail = available_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
     built = build_candidates(hist, coeffs, candidates, quadratic_drag=quadratic_drag)
-    names = list(built)
-    rows = []
-    for combo in enumerate_partitions(names):
-        known = [built[c] for c in combo]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            reg = regress(hist, force=force, known=known, force_accuracy=force_accuracy)
-        row: dict[str, Any] = {
-            "partition": "+".join(combo) or "(none)",
-            "known": list(combo),
-            "alpha": _squeeze(reg.alpha), "beta": _squeeze(reg.beta), "gamma": _squeeze(reg.gamma),
-            "condition_number": float(reg.condition_number),
-            "identifiable": bool(reg.identifiable),
-        }
-        row.update(_verdicts(m, known, reg, dt, scheme))
-        row["recon_nrms"] = _reconstruction_error(hist, known, m) if reconstruct_each else np.nan
-        n_unknown = len([c for c in CANDIDATES if c in avail and c not in combo
-                         and not (c == "linear_damping" and "radiation_memory" in combo)
-                         and not (c == "radiation_memory" and "linear_damping" in combo)])
-        recon = row["recon_nrms"] if np.isfinite(row["recon_nrms"]) else 1e3
-        row["score"] = float(row["spectral_radius"] + (0 if np.isnan(recon) else recon)
-                             + UNKNOWN_WEIGHT * n_unknown)
-        rows.append(row)
+    rows = [_partition_row(hist, combo, [built[c] for c in combo], avail, m, dt, force=force,
+                           scheme=scheme, reconstruct_each=reconstruct_each,
+                           force_accuracy=force_accuracy)
+            for combo in enumerate_partitions(list(built))]
     table = pd.DataFrame(rows)
     table = table.sort_values(["feasible", "score"], ascending=[False, True], kind="stable")
     table.insert(0, "rank", np.arange(1, len(table) + 1))
     table.attrs = {"dt": dt, "scheme": scheme, "mass": m.tolist(),
                    "score": "spectral_radius + recon_nrms + 0.1 * n_unknown (feasible first)"}
     return table.reset_index(drop=True)
+
+
+def _partition_row(hist: xr.Dataset, combo: tuple[str, ...], known: list[KnownComponent],
+                   avail: list[str], m: np.ndarray, dt: float, *, force: str, scheme: str,
+                   reconstruct_each: bool, force_accuracy: float) -> dict[str, Any]:
+    """One row of the ranking: the residual's regression, its stability, the reconstruction
+    error and the score (module doc)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = regress(hist, force=force, known=known, force_accuracy=force_accuracy)
+    row: dict[str, Any] = {
+        "partition": "+".join(combo) or "(none)",
+        "known": list(combo),
+        "alpha": _squeeze(reg.alpha), "beta": _squeeze(reg.beta), "gamma": _squeeze(reg.gamma),
+        "condition_number": float(reg.condition_number),
+        "identifiable": bool(reg.identifiable),
+    }
+    row.update(_verdicts(m, known, reg, dt, scheme))
+    row["recon_nrms"] = _reconstruction_error(hist, known, m) if reconstruct_each else np.nan
+    n_unknown = len([c for c in CANDIDATES if c in avail and c not in combo
+                     and not (c == "linear_damping" and "radiation_memory" in combo)
+                     and not (c == "radiation_memory" and "linear_damping" in combo)])
+    recon = row["recon_nrms"] if np.isfinite(row["recon_nrms"]) else 1e3
+    row["score"] = float(row["spectral_radius"] + (0 if np.isnan(recon) else recon)
+                         + UNKNOWN_WEIGHT * n_unknown)
+    return row
 
 
 def _squeeze(a: np.ndarray) -> float | list:

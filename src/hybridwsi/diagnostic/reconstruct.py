@@ -204,16 +204,8 @@ def reconstruct(
     step = time_step(hist) if max_step is None else float(max_step)
     sol = solve_prescribed(ode, f_p, z_ref[0], zd_ref[0], step, t=t, method=method, rtol=rtol,
                            atol=atol, x0=ode.initial_states(hist))
-    inputs = {
-        "force": force,
-        "known": [c.describe() for c in given],
-        "moved_identified": None if move_identified is None else {
-            "alpha": alpha.tolist(), "beta": beta.tolist(), "gamma": gamma.tolist()},
-        "method": method, "rtol": rtol, "atol": atol, "max_step": step,
-        "interpolation": "cubic spline (not-a-knot)",
-        "reference": {"source": hist.attrs.get("source", ""),
-                      "inputs": hist.attrs.get("inputs", "{}")},
-    }
+    inputs = _inputs(hist, force, given, None if move_identified is None else
+                     (alpha, beta, gamma), method=method, rtol=rtol, atol=atol, max_step=step)
     stab = assess(CoupledStep(m, ode.a_k - alpha, ode.b_k - beta, ode.c_k - gamma))
     if not sol.success:
         inf = [math.inf] * z_ref.shape[1]
@@ -226,6 +218,22 @@ def reconstruct(
         inputs=inputs,
     )
     return ReconstructionResult(out, err, _error_metrics(err, z_ref), stab, sol, inputs)
+
+
+def _inputs(hist: xr.Dataset, force: str, given: list[KnownComponent],
+            moved: tuple[np.ndarray, np.ndarray, np.ndarray] | None, **solver: Any
+            ) -> dict[str, Any]:
+    """The reconstruction's inputs as recorded in its history (and the reference's)."""
+    return {
+        "force": force,
+        "known": [c.describe() for c in given],
+        "moved_identified": None if moved is None else {
+            k: v.tolist() for k, v in zip(("alpha", "beta", "gamma"), moved)},
+        **solver,
+        "interpolation": "cubic spline (not-a-knot)",
+        "reference": {"source": hist.attrs.get("source", ""),
+                      "inputs": hist.attrs.get("inputs", "{}")},
+    }
 
 
 def _mass(hist: xr.Dataset, mass: float | np.ndarray | None) -> np.ndarray:

@@ -123,8 +123,8 @@ def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dic
     coefficients (:func:`hybridwsi.forces.linear.known_from`, the one route)."""
     from hybridwsi.forces.linear import known_from
 
-    hydrostatic, a_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
-    return {"1": [], "2": [hydrostatic], "3": [hydrostatic, a_inf]}
+    hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
+    return {"1": [], "2": [hydrostatic], "3": [hydrostatic, added_mass_inf]}
 
 
 def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
@@ -514,7 +514,7 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
         "hybridwsi_version": version(),
         "quick": quick,
         "bem": {"n_panels": cfg["n_panels"], "n_omega": cfg["n_omega"],
-                "A_inf": _coefficient(coeffs, "added_mass_inf"),
+                "added_mass_inf": _coefficient(coeffs, "added_mass_inf"),
                 "C": _coefficient(coeffs, "hydrostatic_stiffness")},
         "wall_time_s": time.perf_counter() - t0,
     }

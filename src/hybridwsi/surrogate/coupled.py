@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from hybridwsi.cummins.result import SolverResult
 from hybridwsi.diagnostic.integrators import LaggedIntegrator, check_scheme
@@ -316,8 +317,6 @@ def solve_coupled(stepper: CoupledStepper, u: np.ndarray, z0: np.ndarray, v0: np
 def _numpy_loop(stepper: CoupledStepper, s: State, t, pre, eta, k0: int, lead: int,
                 n_steps: int, ref_amp: np.ndarray, progress: bool) -> Loop:
     """The NumPy time loop (NaN after the step where every case had diverged)."""
-    from tqdm.auto import tqdm
-
     phys, (nc, nd) = stepper.phys, s.z.shape
     zs, vs, as_ = (np.empty((nc, n_steps + 1, nd)) for _ in range(3))
     xs = np.empty((nc, n_steps + 1, phys.n_states))

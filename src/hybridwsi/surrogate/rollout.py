@@ -63,7 +63,7 @@ from hybridwsi.surrogate.coupled import (
     solve_coupled,
 )
 from hybridwsi.surrogate.fast import folded_layers
-from hybridwsi.surrogate.features import channel_array
+from hybridwsi.surrogate.features import build_features, channel_array
 from hybridwsi.surrogate.linearise import feature_jacobian, linearise
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.physics import BatchedPhysics, initial_states
@@ -164,8 +164,6 @@ def check_stability(
     refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
     dt = float(dt if dt is not None else time_step(refs[0]))
     phys = BatchedPhysics(mass, known, net.n_dof_)
-    from hybridwsi.surrogate.features import build_features
-
     x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
     jac = feature_jacobian(net, x).mean(0)
     step_map = _linear_map(phys.linearised(), net.spec_, dt, mode, jac, scheme, corrections)
@@ -252,25 +250,13 @@ def _case_arrays(hs: list[xr.Dataset], spec, prescribed, known):
     return eta, pre
 
 
-def rollout(
-    net: ForceNetwork,
-    cases: xr.Dataset | Sequence[xr.Dataset],
-    *,
-    mass: float | np.ndarray,
-    known: Sequence[KnownComponent],
-    mode: str = "lagged",
-    scheme: str = "newmark",
-    prescribed: str | np.ndarray | None = None,
-    n_steps: int | None = None,
-    check: bool = True,
-    force: bool = False,
-    reference_for_check: xr.Dataset | Sequence[xr.Dataset] | None = None,
-    max_iter: int = 50,
-    tol: float = 1e-9,
-    corrections: int = 1,
-    compiled: bool | None = None,
-    progress: bool = False,
-) -> RolloutResult:
+def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
+            mass: float | np.ndarray, known: Sequence[KnownComponent], mode: str = "lagged",
+            scheme: str = "newmark", prescribed: str | np.ndarray | None = None,
+            n_steps: int | None = None, check: bool = True, force: bool = False,
+            reference_for_check: xr.Dataset | Sequence[xr.Dataset] | None = None,
+            max_iter: int = 50, tol: float = 1e-9, corrections: int = 1,
+            compiled: bool | None = None, progress: bool = False) -> RolloutResult:
     """Integrate the hybrid model for a batch of cases.
 
     Each case history supplies the time grid (uniform, same length for all cases), the wave
@@ -318,11 +304,7 @@ def rollout(
     spec, nd, w, lead = net.spec_, net.n_dof_, net.spec_.span, net.spec_.lead
     dt = time_step(hs[0])
     eta, pre = _case_arrays(hs, spec, prescribed, known)
-    n_total = hs[0].sizes["time"]
-    n_max = n_total - w - lead
-    n_steps = n_max if n_steps is None else min(int(n_steps), n_max)
-    if n_steps < 1:
-        raise InputError(f"cases have {n_total} samples; the network window needs more than {w}")
+    n_steps = _n_steps(hs[0].sizes["time"], spec, n_steps)
     prediction = None
     if check:
         prediction = check_stability(
@@ -344,6 +326,16 @@ def rollout(
         layers=folded_layers(net) if use_compiled else None)
     saw = _sawtooth(sol.a, kin["zddot"][:, k0:k0 + n_steps + 1])
     return RolloutResult(_histories(net, hs, sol, mass, mode, known), prediction, sol, saw)
+
+
+def _n_steps(n_total: int, spec: Any, n_steps: int | None) -> int:
+    """Steps a rollout can take on cases of ``n_total`` samples (at most ``n_steps``)."""
+    n_max = n_total - spec.span - spec.lead
+    n_steps = n_max if n_steps is None else min(int(n_steps), n_max)
+    if n_steps < 1:
+        raise InputError(f"cases have {n_total} samples; the network window needs more than "
+                         f"{spec.span}")
+    return n_steps
 
 
 def _refuse_unstable(prediction: stability.StabilityReport, mode: str, force: bool) -> None:
