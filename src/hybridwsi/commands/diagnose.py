@@ -205,19 +205,12 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
     if mass is None:
         notes.append("no mass given (--mass): stability assessment skipped")
         return None
-    try:
-        from hybridwsi.diagnostic.stability import assess
-    except ImportError:
-        notes.append("stability assessment is not available in this installation")
-        return None
+    from hybridwsi.diagnostic.stability import CoupledStep, assess
+
     m = np.asarray(mass, dtype=float)
-    reports = assess(result, float(m.ravel()[0]) if m.size == 1 else m, known,
-                     dt=args.target_dt)
-    if isinstance(reports, dict):
-        reports = list(reports.values())
-    elif not isinstance(reports, (list, tuple)):
-        reports = [reports]
-    return [r.to_dict() for r in reports]
+    step = CoupledStep.from_components(float(m.ravel()[0]) if m.size == 1 else m, known, result,
+                                       dt=args.target_dt, scheme="semi_implicit_euler")
+    return [s.to_dict() for s in assess(step).settings]
 
 
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
