@@ -625,6 +625,22 @@ def long_wave_limit(coeffs: xr.Dataset, dofs: list[str]) -> np.ndarray:
     return np.array([float(column.values[have.index(d)]) if d in have else 0.0 for d in dofs])
 
 
+def components_within(wave: Wave, grid: np.ndarray, what: str, hint: str, *,
+                      allow_below: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [rad/s] and complex amplitudes ``a e^{-iφ}`` [m] of the wave's components
+    with a nonzero amplitude, checked to lie inside ``grid``'s range (a transfer function is
+    interpolated there, never extrapolated; else :class:`InputError` naming ``what`` and
+    ``hint``). ``allow_below``: components below the range are the caller's to handle."""
+    comp = wave.components()
+    keep = comp.amplitude > 0
+    w = comp.omega[keep]
+    below = bool(w.size) and w.min() < grid[0] * (1 - 1e-9) and not allow_below
+    if w.size and (below or w.max() > grid[-1] * (1 + 1e-9)):
+        raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside "
+                         f"{what} {grid[0]:.4g}–{grid[-1]:.4g} rad/s ({hint})")
+    return w, comp.complex_amplitude[keep]
+
+
 def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
                      dof: str | list[str] = "Heave", *, ramp: float = 0.0,
                      with_elevation: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -643,21 +659,15 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
     """
     dofs = [dof] if isinstance(dof, str) else list(dof)
     w_grid, vals = _excitation_transfer(coeffs, dofs, float(getattr(wave, "direction", 0.0)))
-    comp = wave.components()
-    keep = comp.amplitude > 0
-    w = comp.omega[keep]
-    below = bool(w.size) and w.min() < w_grid[0] * (1 - 1e-9)
-    if below and wave.long_waves:  # a record's long waves: towards the limit at ω = 0
+    w, amplitude = components_within(wave, w_grid, "the coefficients' range",
+                                     "narrow omega_range or recompute the BEM coefficients",
+                                     allow_below=wave.long_waves)
+    if w.size and w.min() < w_grid[0] * (1 - 1e-9):  # a record's long waves: towards ω = 0
         w_grid = np.concatenate([[0.0], w_grid])
         vals = np.concatenate([long_wave_limit(coeffs, dofs)[None, :], vals])
-        below = False
-    if w.size and (below or w.max() > w_grid[-1] * (1 + 1e-9)):
-        raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside the "
-                         f"coefficients' range {w_grid[0]:.4g}–{w_grid[-1]:.4g} rad/s "
-                         "(narrow omega_range or recompute the BEM coefficients)")
     tf = np.stack([np.interp(w, w_grid, vals[:, i].real) + 1j * np.interp(w, w_grid, vals[:, i].imag)
                    for i in range(len(dofs))], axis=1)
-    c = comp.complex_amplitude[keep][:, None]
+    c = amplitude[:, None]
     both = harmonic_sum(t, np.concatenate([c * tf, c], axis=1), w)
     force, eta = both[:, :-1], both[:, -1]
     force *= ramp_factor(t, ramp)[:, None]
