@@ -24,13 +24,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from hybridwsi.cases import body_from_case, load_case
+from hybridwsi.casemodel import body_from_case
+from hybridwsi.cases import load_case
 from hybridwsi.cli import Parser, run_script
-from hybridwsi.files import read_netcdf, to_netcdf
+from hybridwsi.files import to_netcdf
 from hybridwsi.hydro import drift
 
 ROOT = Path(__file__).resolve().parent.parent
-DATA = ROOT / "src" / "hybridwsi" / "data"
 FIGURE = ROOT / "docs" / "figures" / "oc3_drift"
 
 
@@ -100,7 +100,7 @@ def ship(cache_dir: str | None) -> xr.Dataset:
     cfg = case["drift"]
     table, wall = case_table(case, cfg["omega"], cfg["panel_size"], cache_dir)
     print(f"wall time {wall:.0f} s; input_hash {table.attrs['input_hash']}")
-    out = DATA / cfg["table"]
+    out = ROOT / "src" / "hybridwsi" / "data" / cfg["table"]  # shipped with the package
     to_netcdf(table, out)
     print(f"-> {out} ({out.stat().st_size / 1e3:.0f} kB)")
     return table
@@ -246,8 +246,10 @@ def main(argv: list[str] | None = None) -> int:
         qtf(args.panel_size, args.mu, args.omega, [(5.0, 11.0), (4.0, 10.0)])
         return 0
     case = load_case("oc3_hywind")
-    table = ship(args.cache_dir) if args.command == "ship" else read_netcdf(
-        DATA / case["drift"]["table"])
+    from hybridwsi.forces.drift import load_table
+
+    table = ship(args.cache_dir) if args.command == "ship" else load_table(
+        case["drift"]["table"])
     summary(table)
     figure(table)
     return 0

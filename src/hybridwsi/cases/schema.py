@@ -586,6 +586,19 @@ CASE = Table(fields={
         "aero_damping": Number(unit="N s/m", default=0.0,
                                doc="linear damping on the hub's fore-aft velocity")},
         doc="forces/rotor.py"),
+    "drift": Table(fields={
+        "table": Text(required=True,
+                      doc="mean drift coefficients (NetCDF of hydro.drift.drift_table): a file "
+                          "shipped in hybridwsi/data, or a path relative to the case file"),
+        "field": Text(choices=("combined", "far_field", "near_field"), default="combined",
+                      doc="combined: far field on Surge/Sway/Yaw, near field on the others"),
+        "panel_size": positive("m", "hull panel size of the solve behind the table"),
+        "wave_directions": ListOf(item=Number(unit="rad"), min_length=1, unique=True,
+                                  doc="wave directions solved"),
+        "n_theta": integer(8, "Kochin-function angles over [0, 2 pi)"),
+        "omega": ListOf(item=positive("rad/s"), min_length=2, unique=True,
+                        doc="frequencies solved (scripts/oc3_drift.py)")},
+        doc="second-order wave drift (hydro/drift.py, forces/drift.py SlowDriftForce)"),
     "external_force": Table(fields={"file": FilePath(
         what="force table", required=True,
         doc="CSV: 'time [s]' and F (one DOF) or F_<DOF> columns, units in the header")}),

@@ -40,19 +40,27 @@ from hybridwsi.waves import Wave, components_within, harmonic_sum, ramp_factor
 DATA = Path(__file__).resolve().parent.parent / "data"
 
 
-def load_table(table: str | Path | xr.Dataset) -> xr.Dataset:
-    """A drift table (:func:`hybridwsi.hydro.drift.drift_table`): a Dataset, a path, or the name
-    of a file shipped in ``hybridwsi/data`` (``"drift_oc3_hywind.nc"``)."""
+def table_path(table: str | Path, folder: Path | None = None) -> Path:
+    """Where a drift table named in a case lives: an absolute path, a path relative to
+    ``folder`` (the case file's), or the name of a file shipped in ``hybridwsi/data``."""
+    path = Path(table).expanduser()
+    candidates = [path] if path.is_absolute() else (
+        ([folder / path] if folder is not None else []) + [Path.cwd() / path, DATA / path])
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate
+    raise InputError(f"drift table not found: {table} (looked for "
+                     f"{', '.join(str(c) for c in candidates)})")
+
+
+def load_table(table: str | Path | xr.Dataset, folder: Path | None = None) -> xr.Dataset:
+    """A drift table (:func:`hybridwsi.hydro.drift.drift_table`): a Dataset, or a file found by
+    :func:`table_path` (``"drift_oc3_hywind.nc"`` is shipped)."""
     from hybridwsi.files import read_netcdf
 
     if isinstance(table, xr.Dataset):
         return table
-    path = Path(table)
-    if not path.is_file() and (DATA / path.name).is_file() and path.name == str(table):
-        path = DATA / path.name
-    if not path.is_file():
-        raise InputError(f"drift table not found: {table} (a path, or a file in {DATA})")
-    return read_netcdf(path)
+    return read_netcdf(table_path(table, folder))
 
 
 class SlowDriftForce(KnownComponent):
@@ -106,7 +114,8 @@ class SlowDriftForce(KnownComponent):
                   field: str | None = None) -> SlowDriftForce:
         """The slow drift of a case's ``[drift]`` table in ``wave``.
 
-        ``[drift] table`` names the shipped coefficients (``hybridwsi/data``) or a path,
+        ``[drift] table`` names the shipped coefficients (``hybridwsi/data``) or a path
+        relative to the case file,
         ``field`` the method (``"combined"``: far field on surge/sway/yaw, near field on
         heave/roll/pitch; ``"far_field"``; ``"near_field"``); the arguments override them.
         ``dofs`` default to the case's ``default_dofs``; the wave's direction picks the table's
@@ -119,7 +128,9 @@ class SlowDriftForce(KnownComponent):
             raise InputError("case has no [drift] table")
         cfg = cfg if isinstance(cfg, Mapping) else {}
         dofs = check_dofs(dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS))
-        data = load_table(table if table is not None else cfg["table"])
+        case_file = getattr(case, "path", None)
+        data = load_table(table if table is not None else cfg["table"],
+                          None if case_file is None else Path(case_file).parent)
         w, d = table_coefficients(data, dofs, direction=float(getattr(wave, "direction", 0.0)),
                                   field=field or cfg.get("field", "combined"))
         return cls(w, d, wave, dofs, ramp=ramp)
@@ -217,4 +228,4 @@ def band_of(wave: Wave) -> tuple[float, float]:
     return float(w[0] - dw / 2), float(w[-1] + dw / 2)
 
 
-__all__ = ["SlowDriftForce", "load_table", "spectral_mean", "newman_spectrum", "band_of"]
+__all__ = ["SlowDriftForce", "load_table", "table_path", "spectral_mean", "newman_spectrum", "band_of"]
