@@ -24,6 +24,7 @@ from hybridwsi.forces.linear import (
     known_from,
     parse_known,
 )
+from hybridwsi.forces.moordyn import MoorDynForce
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
 from hybridwsi.forces.morison import MorisonDrag, Strips, additional_damping, profile_strips
 from hybridwsi.forces.radiation import RadiationMemory
@@ -34,7 +35,7 @@ __all__ = [
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
     "QuadraticDamping", "known_from", "parse_known", "RadiationMemory", "ConstantForce",
     "PrescribedForce",
-    "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
+    "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
     "SlowDriftForce",
 ]

@@ -320,6 +320,83 @@ class MooringSystem:
                                      Tol=_TABLE_TOL, depth=lines.water_depth)
         return -float(h_b), -float(v_b)
 
+    def line_shapes(self, q: Sequence[float] | np.ndarray, n_nodes: int = 201) -> np.ndarray:
+        """Quasi-static shape of every line at the body pose ``q``: positions [m] of ``n_nodes``
+        material points equally spaced in unstretched arc length from the anchor, global
+        frame, shape (n_lines, n_nodes, 3).
+
+        The fairlead force comes from MoorPy's catenary solve (:meth:`fairlead_force`); the
+        profile is the elastic catenary with a frictionless seabed part in closed form
+        (Jonkman 2007, NREL/TP-500-41958, Eqs. 2-2/2-3; not MoorPy's node profile, whose
+        seabed and suspended branches differ by up to the seabed part's stretch at the
+        touchdown point, a jump of ~0.3 m for OC3).
+        """
+        lines = self.lines
+        q = _as_states(q)
+        r = np.array(rotation_matrix(q[3], q[4], q[5]), dtype=float)
+        s = np.linspace(0.0, lines.length, int(n_nodes))
+        w, ea = lines.weight_in_water, lines.EA
+        out = np.empty((lines.n_lines, s.size, 3))
+        for i, (anchor, fairlead) in enumerate(zip(lines.anchors, lines.fairleads)):
+            d = q[:3] + r @ fairlead - anchor
+            l_h = math.hypot(d[0], d[1])
+            h, v = self.fairlead_force(l_h, d[2])
+            v_a = v - w * lines.length  # vertical force at the anchor end (< 0: on the seabed)
+            bottom = max(0.0, -v_a / w)  # length on the seabed
+            sus = np.maximum(s - bottom, 0.0)  # suspended arc length past the touchdown point
+            v0 = max(v_a, 0.0)
+            x = (np.minimum(s, bottom) * (1.0 + h / ea)
+                 + h / w * (np.arcsinh((v0 + w * sus) / h) - np.arcsinh(v0 / h)) + h * sus / ea)
+            z = (h / w * (np.hypot(1.0, (v0 + w * sus) / h) - math.hypot(1.0, v0 / h))
+                 + (v0 * sus + 0.5 * w * sus**2) / ea)
+            u = np.array([d[0], d[1]]) / l_h
+            out[i, :, :2] = anchor[:2] + x[:, None] * u
+            out[i, :, 2] = anchor[2] + z
+        return out
+
+    def drag_dissipation(self, amplitude: Sequence[float], period: float, *, cd: float,
+                         cd_axial: float, diameter: float, n_nodes: int = 201,
+                         n_phase: int = 64, mean: Sequence[float] | None = None
+                         ) -> dict[str, float]:
+        """Energy [J] the lines' drag dissipates per cycle of the harmonic motion
+        ``q(t) = mean + amplitude sin(2π t / period)`` (6 DOFs, m and rad), by Huse's
+        quasi-static-shape method (E. Huse, "Influence of mooring line damping upon rig
+        motions", OTC 5204, 1986): every material point of a line moves as the quasi-static
+        catenary does, ``v(s, t) = ∂P(s; q)/∂q · q̇(t)``, and the Morison drag of that velocity,
+        ``½ ρ d (Cd |v_n|³ + Cd_axial π |v_t|³)`` per unit length (normal and tangential parts,
+        MoorDyn's drag formula), is integrated along the lines and over the cycle (``n_phase``
+        phases, ``n_nodes`` points per line). Valid where the line's own inertia and elastic
+        waves do not matter (periods well above the line's transverse natural periods); the
+        line's shape is re-solved at every phase, so the amplitude may be large.
+
+        Returns ``{"total", "normal", "axial"}`` [J per cycle].
+        """
+        amp = np.asarray(amplitude, dtype=float).reshape(6)
+        q0 = np.zeros(6) if mean is None else np.asarray(mean, dtype=float).reshape(6)
+        omega = 2.0 * np.pi / _positive("period", period)
+        h = 1e-4  # central-difference step along the motion direction, in units of `amplitude`
+        rho = self.lines.rho
+        normal = axial = 0.0
+        for phase in 2.0 * np.pi * np.arange(int(n_phase)) / int(n_phase):
+            q = q0 + amp * math.sin(phase)
+            shape = self.line_shapes(q, n_nodes)
+            dpdq = (self.line_shapes(q + h * amp, n_nodes)
+                    - self.line_shapes(q - h * amp, n_nodes)) / (2.0 * h)
+            v = dpdq * omega * math.cos(phase)  # velocity of each material point [m/s]
+            tangent = np.gradient(shape, axis=1)
+            ds = np.linalg.norm(tangent, axis=2)  # stretched length per node spacing [m]
+            tangent /= ds[..., None]
+            v_t = np.einsum("lnk,lnk->ln", v, tangent)
+            v_n = np.linalg.norm(v - v_t[..., None] * tangent, axis=2)
+            weights = ds.copy()
+            weights[:, [0, -1]] *= 0.5  # trapezoid along the line
+            normal += 0.5 * rho * cd * diameter * float(np.sum(weights * v_n**3))
+            axial += 0.5 * rho * cd_axial * np.pi * diameter * float(
+                np.sum(weights * np.abs(v_t)**3))
+        scale = 2.0 * np.pi / omega / int(n_phase)  # dt of the periodic trapezoid over a cycle
+        return {"total": (normal + axial) * scale, "normal": normal * scale,
+                "axial": axial * scale}
+
     def tabulate(self, ranges: Mapping[str, float] | None = None,
                  spacing: float = DEFAULT_SPACING) -> MooringTable:
         """The interpolant over the displacement box ``±ranges`` (default :data:`DEFAULT_RANGES`)."""
