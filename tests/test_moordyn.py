@@ -272,16 +272,17 @@ def test_resume_from_saved_state_continues_exactly(case):
     pytest.importorskip("moordyn")
     t = np.arange(0, 201) * 0.1
     x = _surge(t)
+    v = np.gradient(x, t)
     whole = MoorDynForce.from_case(case, ["Surge"])
-    for k, (tk, xk) in enumerate(zip(t, x)):
-        whole.begin_step(tk, [xk], [0.0], 0.1)
+    for k, (tk, xk, vk) in enumerate(zip(t, x, v)):
+        whole.begin_step(tk, [xk], [vk], 0.1)
         if k == 100:  # saved in the middle (and pickled, as a checkpoint file would be)
             state = pickle.loads(pickle.dumps(whole.get_state()))
     ref = whole.records()
     second = pickle.loads(pickle.dumps(MoorDynForce.from_case(case, ["Surge"])))
     second.set_state(state)
-    for tk, xk in zip(t[100:], x[100:]):
-        second.begin_step(tk, [xk], [0.0], 0.1)
+    for tk, xk, vk in zip(t[100:], x[100:], v[100:]):
+        second.begin_step(tk, [xk], [vk], 0.1)
     got = second.records()
     np.testing.assert_allclose(got["force"].values, ref["force"].values[100:], rtol=1e-10,
                                atol=1e-6)
@@ -313,7 +314,7 @@ def test_force_on_a_history_replays_the_coupled_run(case):
 
     dofs = ["Surge", "Heave", "Pitch"]
     comp = MoorDynForce.from_case(case, dofs, dt=0.1)
-    hist = simulate(oc3_coefficients(case), dofs=dofs, duration=20.0, dt=0.1,
+    hist = simulate(oc3_coefficients(case), dofs=dofs, duration=10.0, dt=0.1,
                     z0=[3.0, 0.2, 0.01], forces=[comp], radiation="none")
     np.testing.assert_allclose(comp.force(hist), hist["F_ext"].values, rtol=1e-9, atol=1e-3)
     rec = comp.records()

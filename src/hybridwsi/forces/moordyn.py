@@ -56,6 +56,11 @@ from hybridwsi.forces.mooring import rotation_matrix
 
 #: options every run gets on top of the file's: no per-step "t = ..." line on the console
 RUN_OPTIONS = {"disableOutTime": 1}
+#: longest chord [s] of the fairlead path inside a solver step (docs/OC3_HYWIND.md: straight
+#: chords between 0.1 s samples put the in-phase surge stiffness at T = 10 s 8 % above its limit,
+#: 4 % per halving; 0.025 s chords leave 2 % of it, 0.5 % of the force amplitude; the loop area
+#: does not notice)
+PATH_STEP = 0.025
 #: default translation steps [m] of the finite-difference linearisation (docs: a central
 #: difference over ±0.5 m has a truncation error < 1e-4 of K11, K33 for OC3)
 FD_STEP = 0.5
@@ -324,6 +329,14 @@ class _System:
                 self.md.Close(self.sys)
             self.sys = None
         self._dir.cleanup()
+
+
+def _hermite(q0: np.ndarray, v0: np.ndarray, q1: np.ndarray, v1: np.ndarray, h: float,
+             s: float) -> np.ndarray:
+    """Cubic Hermite interpolant of the pose at ``t0 + s h`` from the end values and rates."""
+    s2, s3 = s * s, s * s * s
+    return ((2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * h * v0
+            + (-2 * s3 + 3 * s2) * q1 + (s3 - s2) * h * v1)
 
 
 def _wrench(forces: np.ndarray, arms: np.ndarray) -> np.ndarray:
@@ -606,7 +619,8 @@ class MoorDynForce(KnownComponent):
         self._rec_t: list[float] = []
         self._rec_f: list[np.ndarray] = []
         self._rec_tension: list[np.ndarray] = []
-        self._q = np.zeros(6)
+        self._q = np.zeros(6)  # pose and its rate at the live state's time
+        self._qdot = np.zeros(6)
         self._force6 = np.zeros(6)  # lines' force minus F0 of the current state [N, N m]
 
     def _start(self, t: float, q: np.ndarray) -> None:
@@ -616,10 +630,11 @@ class MoorDynForce(KnownComponent):
         self._live = _System(self.text, self.layout, self.fairleads(q), t)
         self._reset_records()
 
-    def _update(self, q: np.ndarray, tension: np.ndarray | None = None) -> None:
+    def _update(self, q: np.ndarray, qdot: np.ndarray, tension: np.ndarray | None = None
+                ) -> None:
         """Force and records of the live state at pose ``q`` (``tension``: known already)."""
         live = self._live
-        self._q = q
+        self._q, self._qdot = q, qdot
         self._force6 = _wrench(live.point_forces, self._arms(q)) - self._f0
         self._rec_t.append(live.t)
         self._rec_f.append(self._force6)
@@ -628,23 +643,29 @@ class MoorDynForce(KnownComponent):
     def begin_step(self, t: float, z: np.ndarray, zdot: np.ndarray, dt: float) -> None:
         """Bring MoorDyn to time ``t`` [s] with the body at ``z`` [m, rad] (the solver's hook).
 
-        Called at every sample: a later ``t`` advances MoorDyn from its current time with the
-        fairleads moving linearly to their positions at ``z`` (sub-steps of ``dtM``); the same
-        ``t`` keeps the state (a repeated call, or the first call after :meth:`set_state`); an
-        earlier ``t``, or the first call, starts a new run from MoorDyn's static equilibrium at
-        ``z``. ``zdot`` and ``dt`` are not needed (the path between samples is the chord).
+        Called at every sample: a later ``t`` advances MoorDyn from its current time along the
+        cubic Hermite path of the pose between the two samples (positions and rates, ``z``,
+        ``zdot`` [m/s, rad/s]), in chords of at most :data:`PATH_STEP` (MoorDyn moves a coupled
+        point at constant velocity within a call and sub-steps each chord with its ``dtM``); the
+        same ``t`` keeps the state (a repeated call, or the first call after
+        :meth:`set_state`); an earlier ``t``, or the first call, starts a new run from
+        MoorDyn's static equilibrium at ``z``. ``dt`` is not needed.
         """
-        q = self._pose(z)
+        q, qdot = self._pose(z), self._pose(zdot)
         t = float(t)
         live = self._live
         tol = 1e-9 * max(1.0, abs(t))
         if live is None or t < live.t - tol or not self._rec_t:
             self._start(t, q)
         elif t > live.t + tol:
-            live.step(self.fairleads(q), t)
+            t0, q0, v0 = live.t, self._q, self._qdot
+            h = t - t0
+            n = max(1, math.ceil(h / PATH_STEP - 1e-9))
+            for j in range(1, n + 1):
+                live.step(self.fairleads(_hermite(q0, v0, q, qdot, h, j / n)), t0 + h * j / n)
         else:
             return
-        self._update(q)
+        self._update(q, qdot)
 
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``F(t_k) − F0`` held over the step, on the component's DOFs, plus ``−k_ψ ψ`` at ``z``."""
@@ -683,23 +704,27 @@ class MoorDynForce(KnownComponent):
             coords={"time": ("time", t, {"units": "s"}), "dof": list(RIGID_DOFS), "line": lines})
 
     # ------------------------------------------------------------------ prescribed motion
-    def drive(self, t: np.ndarray, z: np.ndarray) -> xr.Dataset:
-        """MoorDyn along a prescribed motion: ``z`` (n_time, n_dof) [m, rad] at times ``t`` [s],
-        from the static equilibrium at ``z[0]``; returns :meth:`records` of that run plus
-        ``F(time, dof)`` the component's force on its DOFs (yaw spring included). Runs on a
+    def drive(self, t: np.ndarray, z: np.ndarray, zdot: np.ndarray | None = None
+              ) -> xr.Dataset:
+        """MoorDyn along a prescribed motion: ``z`` (n_time, n_dof) [m, rad] and its rate
+        ``zdot`` [m/s, rad/s] (default: ``numpy.gradient`` of ``z``) at times ``t`` [s], from
+        the static equilibrium at ``z[0]``; returns :meth:`records` of that run plus
+        ``F(time, dof_c)`` the component's force on its DOFs (yaw spring included). Runs on a
         :meth:`spawn` copy: this component's own run is untouched."""
         t = np.asarray(t, dtype=float)
+        if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise InputError("MoorDyn drive: time must be finite and increasing (2+ samples)")
         z = np.asarray(z, dtype=float).reshape(t.size, -1)
-        if t.ndim != 1 or t.size < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-            raise InputError("MoorDyn drive: time must be finite and increasing")
-        if not np.all(np.isfinite(z)):
+        zdot = (np.gradient(z, t, axis=0) if zdot is None
+                else np.asarray(zdot, dtype=float).reshape(z.shape))
+        if not (np.all(np.isfinite(z)) and np.all(np.isfinite(zdot))):
             raise InputError("MoorDyn drive: the motion is not finite")
         copy = self.spawn()
         try:
             out = np.empty_like(z)
-            for k, (tk, zk) in enumerate(zip(t, z)):
-                copy.begin_step(tk, zk, np.zeros_like(zk), 0.0)
-                out[k] = copy.ode_force(tk, zk, zk, np.zeros(0))
+            for k, (tk, zk, vk) in enumerate(zip(t, z, zdot)):
+                copy.begin_step(tk, zk, vk, 0.0)
+                out[k] = copy.ode_force(tk, zk, vk, np.zeros(0))
             rec = copy.records()
         finally:
             copy.close()
@@ -707,12 +732,14 @@ class MoorDynForce(KnownComponent):
                           dof_c=list(self.dofs))
 
     def force(self, hist: xr.Dataset) -> np.ndarray:
-        """The force on the history's motion (MoorDyn driven along ``z``), (n_time, n_dof)."""
+        """The force on the history's motion (MoorDyn driven along ``z``, ``zdot``),
+        (n_time, n_dof) [N, N m]."""
         dofs = tuple(str(d) for d in hist["dof"].values)
         if dofs != self.dofs:
             raise InputError(f"MoorDyn component DOFs {list(self.dofs)} differ from the "
                              f"history's {list(dofs)}")
-        return self.drive(kinematic(hist, "time"), kinematic(hist, "z"))["F"].values
+        return self.drive(hist["time"].values, kinematic(hist, "z"),
+                          kinematic(hist, "zdot"))["F"].values
 
     # ------------------------------------------------------------------ resume
     def get_state(self) -> dict[str, Any]:
@@ -721,7 +748,7 @@ class MoorDynForce(KnownComponent):
         if self._live is None or not self._rec_t:
             raise SolverError("MoorDyn: no run to save (begin_step has not been called)")
         live = self._live
-        return {"t": live.t, "q": self._q.copy(), "x": live.x.copy(),
+        return {"t": live.t, "q": self._q.copy(), "qdot": self._qdot.copy(), "x": live.x.copy(),
                 "point_forces": live.point_forces.copy(),
                 "tension": self._rec_tension[-1].copy(), "moordyn": live.serialize()}
 
@@ -743,7 +770,8 @@ class MoorDynForce(KnownComponent):
         live.point_forces = np.asarray(state["point_forces"], float).reshape(-1, 3)
         self._live = live
         self._reset_records()
-        self._update(q, np.asarray(state["tension"], float).reshape(-1, 2))
+        self._update(q, np.asarray(state.get("qdot", np.zeros(6)), float),
+                     np.asarray(state["tension"], float).reshape(-1, 2))
 
     def describe(self) -> str:
         segments = "/".join(map(str, sorted(set(self.layout.segments))))

@@ -58,14 +58,15 @@ def forced_loop(component: MoorDynForce, system: MooringSystem | None, dof: str,
     ``cycles`` periods are run (the first ramps up); the last one is returned: ``x`` and
     ``xdot``, MoorDyn's force ``F_moordyn`` and the quasi-static MoorPy force ``F_quasi_static``
     (both ``F(q) − F0`` on ``dof``, the MoorDyn one without the yaw spring; None system: no
-    quasi-static force), ``T_fairlead``/``T_anchor`` (time, line) [N]. ``component`` gives
+    quasi-static force; then also MoorPy's ``T_fairlead_quasi_static``), ``T_fairlead`` and
+    ``T_anchor`` (time, line) [N] of MoorDyn. ``component`` gives
     the MoorDyn input and the arms; it is driven on a copy (its own run is untouched).
     """
     (dof,) = check_dofs([dof])
     i = RIGID_DOFS.index(dof)
     t = np.arange(int(round(cycles * period / dt)) + 1) * dt
     x, xdot = harmonic_motion(t, amplitude, period)
-    rec = component.spawn([dof]).drive(t, x[:, None])
+    rec = component.spawn([dof]).drive(t, x[:, None], xdot[:, None])
     last = t >= t[-1] - period - 1e-9
     q = np.zeros((int(last.sum()), 6))
     q[:, i] = x[last]
@@ -80,8 +81,12 @@ def forced_loop(component: MoorDynForce, system: MooringSystem | None, dof: str,
                "cycles": cycles, "moordyn": component.describe()})
     if system is not None:
         f0 = system.lines_force6(np.zeros(6))[i]
-        f_qs = np.array([system.lines_force6(qk)[i] for qk in q]) - f0
+        f_qs, t_qs = np.empty(len(q)), np.empty((len(q), system.lines.n_lines))
+        for k, qk in enumerate(q):
+            f_qs[k] = system.lines_force6(qk)[i] - f0
+            t_qs[k] = [line.TB for line in system.moorpy.lineList]
         out["F_quasi_static"] = ("time", f_qs, {"units": force_unit(dof)})
+        out["T_fairlead_quasi_static"] = (("time", "line"), t_qs, {"units": "N"})
     return out
 
 
@@ -90,15 +95,18 @@ def loop_metrics(loop: xr.Dataset, force: str = "F_moordyn") -> dict[str, float]
 
     ``E = −∫ F ẋ dt`` over the cycle [J]; ``K_dyn = −F̂/X̂`` [N/m or N m/rad];
     ``phase = arg K_dyn`` [deg]; ``B_eq = Im K_dyn / ω``; ``E_first_harmonic = π X² Im K_dyn``;
-    tension range of each line (max − min of ``T_fairlead``) [N].
+    fairlead tension range of each line (``T_fairlead``, or ``T_fairlead_quasi_static`` for
+    ``force="F_quasi_static"``) [N].
     """
     t = loop["time"].values
     f, xdot, x = (loop[name].values for name in (force, "xdot", "x"))
     omega = 2.0 * np.pi / loop.attrs["period"]
     energy = -float(np.trapezoid(f * xdot, t))
-    k_dyn = -harmonic_amplitude(t, f, omega) / harmonic_amplitude(t, x, omega)
+    # the harmonic fit on one period without its repeated end point (t[-1] = t[0] + period)
+    k_dyn = (-harmonic_amplitude(t[:-1], f[:-1], omega)
+             / harmonic_amplitude(t[:-1], x[:-1], omega))
     amp = float(loop.attrs["amplitude"])
-    tension = loop["T_fairlead"].values
+    tension = loop["T_fairlead_quasi_static" if force == "F_quasi_static" else "T_fairlead"].values
     return {"E": energy, "E_first_harmonic": float(np.pi * amp**2 * k_dyn.imag),
             "K_real": float(k_dyn.real), "B_eq": float(k_dyn.imag / omega),
             "phase_deg": float(np.degrees(np.angle(k_dyn))),
@@ -111,7 +119,7 @@ def hysteresis_figure(loops: Mapping[str, xr.Dataset],
                       ) -> tuple[plt.Figure, xr.Dataset]:
     """Force against displacement, MoorDyn and quasi-static, one panel per loop (label ->
     :func:`forced_loop`); ``references``: label -> Huse's loop area [J], quoted in the panel.
-    Returns the figure and the data behind it (variables ``<label>/<name>``)."""
+    Returns the figure and the data behind it (variables ``<label>__<name>``)."""
     n = len(loops)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8), squeeze=False)
     data = {}
@@ -131,7 +139,7 @@ def hysteresis_figure(loops: Mapping[str, xr.Dataset],
         ax.set_ylabel(f"{dof} mooring force F − F0 [M{force_unit(dof)}]")
         ax.grid(alpha=0.3)
         for name in loop.data_vars:
-            data[f"{label}/{name}"] = loop[name].rename({"time": f"time_{label}"})
+            data[f"{label}__{name}"] = loop[name].rename({"time": f"time_{label}"})
     axes[0][0].legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     ds = xr.Dataset(data)
