@@ -102,6 +102,9 @@ def test_input_editing_and_bad_inputs():
         read_layout(SHIPPED.replace("1   main      1        4", "1   main      1        2"))
     with pytest.raises(InputError, match="dtM"):
         read_layout(SHIPPED.replace("dtM", "dtX"))
+    v1 = SHIPPED.replace("384.243E6  -0.8      0.0      1.6", "384.243E6  -0.8      1.6")
+    with pytest.raises(InputError, match="v1 files"):  # a v1 line type has no EI column
+        read_layout(v1)
     with pytest.raises(InputError, match="segments"):
         set_segments(SHIPPED, 0)
 
@@ -303,6 +306,10 @@ def test_ode_force_needs_begin_step(case):
         comp.ode_force(0.0, np.zeros(1), np.zeros(1), np.zeros(0))
     with pytest.raises(InputError, match="1 DOFs"):
         comp.begin_step(0.0, np.zeros(2), np.zeros(2), 0.1)
+    with pytest.raises(SolverError, match="not finite"):
+        comp.begin_step(0.0, np.array([np.nan]), np.zeros(1), 0.1)
+    with pytest.raises(InputError, match="increasing"):
+        comp.drive([0.0, 0.0], np.zeros((2, 1)))
 
 
 def test_force_on_a_history_replays_the_coupled_run(case):

@@ -226,6 +226,11 @@ def _points(text: str) -> tuple[dict[str, tuple[str, np.ndarray]], list[str]]:
 
 def read_layout(text: str) -> MoorDynLayout:
     """Parse the anchors, fairleads and lines of a MoorDyn v2 input (:class:`MoorDynLayout`)."""
+    for _, words in _table(text, ("LINE TYPES", "LINE DICTIONARY")):
+        if len(words) < 10:  # v1: TypeName Diam Mass EA BA Can Cat Cdn Cdt
+            raise InputError(f"MoorDyn input: line type '{words[0] if words else ''}' has "
+                             f"{len(words)} columns, a v2 file has 10 (TypeName Diam Mass/m EA "
+                             "BA/-zeta EI Cd Ca CdAx CaAx); moordyn 2.7 does not read v1 files")
     points, coupled = _points(text)
     anchors, fairleads, order, anchor_node, segments, seen = [], [], [], [], [], set()
     for _, words in _table(text, ("LINES", "LINE PROPERTIES", "LINE LIST")):
@@ -272,6 +277,20 @@ class _System:
         path = Path(self._dir.name) / "mooring.dat"
         path.write_text(set_options(text, RUN_OPTIONS))
         self.sys = None
+        try:
+            self._create(path, positions, solve_statics)
+        except BaseException:
+            self.close()
+            raise
+        self.lines = [md.GetLine(self.sys, i + 1) for i in range(layout.n_lines)]
+        self.x = np.array(positions, dtype=float)
+        self.t = float(t)
+        coupled = [md.GetPoint(self.sys, i + 1) for i in range(md.GetNumberPoints(self.sys))]
+        coupled = [p for p in coupled if md.GetPointType(p) == md.POINT_TYPE_COUPLED]
+        self.point_forces = np.array([md.GetPointForce(coupled[j]) for j in layout.coupled])
+
+    def _create(self, path: Path, positions: np.ndarray, solve_statics: bool) -> None:
+        md = self.md
         with _quiet():
             try:
                 self.sys = md.Create(str(path))
@@ -280,17 +299,11 @@ class _System:
             md.SetVerbosity(self.sys, md.LEVEL_NONE)
             init = md.Init if solve_statics else md.Init_NoIC
             n_cpl = md.NCoupledDOF(self.sys)
-            if n_cpl != 3 * layout.n_lines:
+            if n_cpl != 3 * self.layout.n_lines:
                 raise InputError(f"MoorDyn input: {n_cpl} coupled DOFs, expected 3 per line")
             rc = init(self.sys, self._flat(positions), [0.0] * n_cpl)
         if rc != 0:
             raise SolverError(f"MoorDyn initialisation failed (error code {rc})")
-        self.lines = [md.GetLine(self.sys, i + 1) for i in range(layout.n_lines)]
-        self.x = np.array(positions, dtype=float)
-        self.t = float(t)
-        coupled = [md.GetPoint(self.sys, i + 1) for i in range(md.GetNumberPoints(self.sys))]
-        coupled = [p for p in coupled if md.GetPointType(p) == md.POINT_TYPE_COUPLED]
-        self.point_forces = np.array([md.GetPointForce(coupled[j]) for j in layout.coupled])
 
     def _flat(self, positions: np.ndarray) -> list[float]:
         """Fairlead positions per line (n, 3) -> MoorDyn's coupled-DOF vector (file order)."""
@@ -302,7 +315,10 @@ class _System:
         """Advance to ``t`` with the fairleads moving linearly from ``self.x`` to ``positions``."""
         h = t - self.t
         vel = (positions - self.x) / h
-        f = self.md.Step(self.sys, self._flat(self.x), self._flat(vel), self.t, h)
+        try:
+            f = self.md.Step(self.sys, self._flat(self.x), self._flat(vel), self.t, h)
+        except Exception as exc:  # MoorDyn's own failures (NaN states, ...)
+            raise SolverError(f"MoorDyn failed at t = {t:.6g} s: {exc}") from None
         f = np.asarray(f, dtype=float).reshape(-1, 3)[list(self.layout.coupled)]
         if f.shape != (self.layout.n_lines, 3) or not np.all(np.isfinite(f)):
             raise SolverError(f"MoorDyn failed at t = {t:.6g} s (non-finite line force); "
@@ -653,6 +669,8 @@ class MoorDynForce(KnownComponent):
         """
         q, qdot = self._pose(z), self._pose(zdot)
         t = float(t)
+        if not (math.isfinite(t) and np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
+            raise SolverError(f"MoorDyn: the body state at t = {t:.6g} s is not finite")
         live = self._live
         tol = 1e-9 * max(1.0, abs(t))
         if live is None or t < live.t - tol or not self._rec_t:
@@ -668,7 +686,7 @@ class MoorDynForce(KnownComponent):
         self._update(q, qdot)
 
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """``F(t_k) − F0`` held over the step, on the component's DOFs, plus ``−k_ψ ψ`` at ``z``."""
+        """``F(t_k) − F0`` held over the step on the component's DOFs, plus ``−k_ψ ψ`` at z."""
         if self._live is None:
             raise SolverError("MoorDynForce is stateful: the solver must call begin_step(t, z, "
                               "zdot, dt) at every step before ode_force")
