@@ -119,8 +119,11 @@ def test_missing_moordyn_is_one_input_error(monkeypatch, case):
 def test_from_case_errors(case, tmp_path):
     with pytest.raises(InputError, match="moordyn_file"):
         MoorDynForce.from_case({"mooring": {}}, ["Surge"])
+    relative = {**case, "mooring": {**case["mooring"], "moordyn_file": "oc3_hywind_moordyn.dat"}}
     with pytest.raises(InputError, match="cannot read"):
-        MoorDynForce.from_case(case, ["Surge"], case_dir=tmp_path)
+        MoorDynForce.from_case(relative, ["Surge"], case_dir=tmp_path)
+    # the loaded case names the file by its resolved path (the schema checks it exists)
+    assert MoorDynForce.from_case(case, ["Surge"], case_dir=tmp_path).text == SHIPPED
     with pytest.raises(InputError, match="degree"):
         MoorDynForce(SHIPPED, ["Surge", "Bogus"])
 
@@ -323,8 +326,17 @@ def test_force_on_a_history_replays_the_coupled_run(case):
     comp = MoorDynForce.from_case(case, dofs, dt=0.1)
     hist = simulate(oc3_coefficients(case), dofs=dofs, duration=10.0, dt=0.1,
                     z0=[3.0, 0.2, 0.01], forces=[comp], radiation="none")
-    np.testing.assert_allclose(comp.force(hist), hist["F_ext"].values, rtol=1e-9, atol=1e-3)
+    # its own run: the recorded forces; a fresh component drives MoorDyn along z, zdot again
+    np.testing.assert_allclose(comp.force(hist), hist["F_ext"].values, rtol=1e-12, atol=1e-6)
+    np.testing.assert_allclose(comp.spawn().force(hist), hist["F_ext"].values, rtol=1e-9,
+                               atol=1e-3)
+    from hybridwsi.forces.mooring import LineTensions
+
+    assert isinstance(comp, LineTensions) and comp.n_lines == 3
     rec = comp.records()
+    tension = comp.line_tensions(hist)
+    np.testing.assert_array_equal(tension[..., 0], rec["T_fairlead"].values)
+    np.testing.assert_array_equal(tension[..., 1], rec["T_anchor"].values)
     assert rec.sizes == {"time": hist.sizes["time"], "dof": 6, "line": 3}
     np.testing.assert_allclose(rec["time"], hist["time"])
     # surge +3 m moves the fairleads towards line 1's anchor: line 1 slackens, 2 and 3 tighten

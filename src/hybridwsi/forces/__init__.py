@@ -35,7 +35,8 @@ __all__ = [
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
     "QuadraticDamping", "known_from", "parse_known", "RadiationMemory", "ConstantForce",
     "PrescribedForce",
-    "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
+    "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem",
+    "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
     "SlowDriftForce",
 ]

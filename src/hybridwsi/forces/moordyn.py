@@ -635,6 +635,7 @@ class MoorDynForce(KnownComponent):
         self._rec_t: list[float] = []
         self._rec_f: list[np.ndarray] = []
         self._rec_tension: list[np.ndarray] = []
+        self._rec_q: list[np.ndarray] = []
         self._q = np.zeros(6)  # pose and its rate at the live state's time
         self._qdot = np.zeros(6)
         self._force6 = np.zeros(6)  # lines' force minus F0 of the current state [N, N m]
@@ -653,6 +654,7 @@ class MoorDynForce(KnownComponent):
         self._q, self._qdot = q, qdot
         self._force6 = _wrench(live.point_forces, self._arms(q)) - self._f0
         self._rec_t.append(live.t)
+        self._rec_q.append(q)
         self._rec_f.append(self._force6)
         self._rec_tension.append(live.tensions() if tension is None else tension)
 
@@ -749,15 +751,44 @@ class MoorDynForce(KnownComponent):
         return rec.assign(F=(("time", "dof_c"), out, {"units": "N, N m per DOF"}),
                           dof_c=list(self.dofs))
 
+    def _ran_in(self, hist: xr.Dataset) -> bool:
+        """True when ``hist`` is the run this component recorded (same times, same motion)."""
+        t = hist["time"].values
+        if len(self._rec_t) != t.size:
+            return False
+        q = np.array(self._rec_q)[:, self._index]
+        return (np.allclose(self._rec_t, t, rtol=0.0, atol=1e-9 * max(1.0, float(t[-1])))
+                and np.array_equal(q, kinematic(hist, "z")))
+
     def force(self, hist: xr.Dataset) -> np.ndarray:
-        """The force on the history's motion (MoorDyn driven along ``z``, ``zdot``),
-        (n_time, n_dof) [N, N m]."""
+        """The force on the history, (n_time, n_dof) [N, N m]: what entered the ODE when
+        ``hist`` is the run this component was coupled in (its records), else MoorDyn driven
+        along the history's ``z``, ``zdot`` (:meth:`drive`)."""
         dofs = tuple(str(d) for d in hist["dof"].values)
         if dofs != self.dofs:
             raise InputError(f"MoorDyn component DOFs {list(self.dofs)} differ from the "
                              f"history's {list(dofs)}")
+        if self._ran_in(hist):
+            f = np.array(self._rec_f)
+            f[:, 5] -= self.yaw_spring * np.array(self._rec_q)[:, 5]
+            return f[:, self._index]
         return self.drive(hist["time"].values, kinematic(hist, "z"),
                           kinematic(hist, "zdot"))["F"].values
+
+    @property
+    def n_lines(self) -> int:
+        """Number of mooring lines."""
+        return self.layout.n_lines
+
+    def line_tensions(self, hist: xr.Dataset) -> np.ndarray:
+        """Fairlead and anchor tension of every line at the history's samples,
+        (n_time, n_lines, 2) [N] (the :class:`~hybridwsi.forces.mooring.LineTensions`
+        protocol): the recorded ones when ``hist`` is this component's run, else from
+        :meth:`drive` along the history."""
+        if self._ran_in(hist):
+            return np.array(self._rec_tension)
+        rec = self.drive(hist["time"].values, kinematic(hist, "z"), kinematic(hist, "zdot"))
+        return np.stack([rec["T_fairlead"].values, rec["T_anchor"].values], axis=-1)
 
     # ------------------------------------------------------------------ resume
     def get_state(self) -> dict[str, Any]:
