@@ -107,8 +107,13 @@ BROKEN: dict[str, tuple[str, tuple[str, ...]]] = {
                              ("forces.morison", "no [hydrodynamics] drag_cd")),
     "mooring-model-unknown": (OC3_TEXT + '\n[forces]\nmooring = "elastic"\n',
                               ("forces.mooring", "'elastic'")),
-    "moordyn-without-input": (OC3_TEXT + '\n[forces]\nmooring = "moordyn"\n',
+    "moordyn-without-input": (_edit(OC3_TEXT, 'moordyn_file = "oc3_hywind_moordyn.dat"\n', "")
+                              + '\n[forces]\nmooring = "moordyn"\n',
                               ("forces.mooring", "needs [mooring] moordyn_file")),
+    "moordyn-input-missing": (_edit(OC3_TEXT, 'moordyn_file = "oc3_hywind_moordyn.dat"',
+                                    'moordyn_file = "lines/nowhere.dat"'),
+                              ("mooring.moordyn_file", "MoorDyn input file 'lines/nowhere.dat' "
+                                                       "not found")),
     "mooring-without-table": (SPHERE_TEXT + '[forces]\nmooring = "table"\n',
                               ("forces.mooring", "no [mooring] table")),
     "convolution-nonlinear": (SPHERE_TEXT + '[forces]\nhydrostatics = "nonlinear"\n'

@@ -267,9 +267,14 @@ class Either(Node):
 
 @dataclass(frozen=True, kw_only=True)
 class FilePath(Node):
-    """A file path relative to the case file's folder (absolute paths kept); must exist."""
+    """A file path relative to the case file's folder (absolute paths kept); must exist.
+
+    ``shipped``: a package whose files a bare name may also mean when it is not beside the
+    case file (a copy of a built-in case keeps finding the built-in case's MoorDyn input).
+    """
 
     what: str = "file"
+    shipped: str | None = None
 
     def kind(self) -> str:
         return f"a path to a {self.what}, relative to the case file"
@@ -278,6 +283,11 @@ class FilePath(Node):
         if not isinstance(value, str) or not value.strip():
             raise ctx.fail(at, f"expected {self.kind()}, got {_shown(value)}")
         path = (ctx.directory / Path(value).expanduser()).resolve()
+        if not path.is_file() and self.shipped and Path(value).name == value:
+            from importlib import resources
+
+            packaged = Path(str(resources.files(self.shipped) / value))
+            path = packaged if packaged.is_file() else path
         if not path.is_file():
             raise ctx.fail(at, f"{self.what} {value!r} not found (looked for {path})")
         try:
@@ -528,8 +538,10 @@ _MOORING = Table(fields={
     "weight_in_water": positive("N/m", "apparent weight per length", required=True),
     "EA": positive("N", "extensional stiffness", required=True),
     "yaw_spring": nonnegative("N m/rad", "additional linear yaw stiffness", default=0.0),
-    "moordyn_file": FilePath(what="MoorDyn input file",
-                              doc="the MoorDyn v2 input of the same lines (forces/moordyn.py)"),
+    "moordyn_file": FilePath(what="MoorDyn input file", shipped="hybridwsi.cases",
+                              doc="the MoorDyn v2 input of the same lines (forces/moordyn.py): "
+                                  "a path relative to the case file, or the name of one "
+                                  "shipped with the built-in cases"),
     "table": Table(fields={**_DOF_BOX, "spacing": positive("m", "grid step in (l_h, l_v)")},
                    doc="tabulation box of the interpolant: half-width per DOF"),
     "reference": Table(fields={
