@@ -27,6 +27,7 @@ import numpy as np
 from pathlib import Path
 from typing import Any
 
+from hybridwsi._meta import provenance
 from hybridwsi.cases import load_case
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.errors import SolverError
@@ -175,7 +176,10 @@ def hysteresis(out: Path, figure: Path) -> None:
               f"{qs['T_fairlead_min'][0] / 1e3:.0f}–{qs['T_fairlead_max'][0] / 1e3:.0f} |",
               flush=True)
     fig, data = hysteresis_figure(loops, huse)
-    data.attrs["moordyn"] = comp.describe()
+    data.attrs.update({"moordyn": comp.describe().replace(f"{ROOT}/", ""),
+                       "made_by": "scripts/oc3_moordyn.py hysteresis",
+                       "versions": json.dumps(provenance("moordyn", "moorpy")),
+                       "huse_J_per_cycle": json.dumps(huse)})
     to_netcdf(data, figure.with_suffix(".nc"))
     fig.savefig(figure.with_suffix(".png"), dpi=120)
     print(f"-> {figure.with_suffix('.png')}, {figure.with_suffix('.nc')}")
