@@ -108,6 +108,25 @@ class KramerSetup:
     drop_heights: dict[str, float]
     dt: float
     duration: float
+    #: :meth:`hydrostatic_table`, built on first use (not an init field, so
+    #: ``dataclasses.replace`` with another body or stiffness starts without it)
+    _table: tuple[np.ndarray, np.ndarray] | None = field(default=None, init=False, repr=False,
+                                                         compare=False)
+
+    def hydrostatic_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """The exact heave force F_hs(z) [N] on 4001 heaves z [m] over the floating range.
+
+        A cubic in z where the sphere is partly submerged, so linear interpolation on it is
+        exact to ~1e-7 N; tabulated once per set-up (each point is a call of the body's
+        exact restoring force, ~0.1 ms).
+        """
+        if self._table is None:
+            r = float(self.body.radius)
+            z = np.linspace(-r, r, 4001)
+            f = ExactHydrostatic(self.body, ["Heave"], self.stiffness).force(
+                make_history(np.arange(z.size, dtype=float), z, dof=["Heave"], check=False))
+            self._table = (z, f[:, 0])
+        return self._table
 
     def known(self) -> list[KnownComponent]:
         """The physics the residual is measured against: exact hydrostatics, A∞, memory.
@@ -358,12 +377,8 @@ def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
     c = np.zeros((n_run, len(STRUCTURED_TERMS))) if coef is None else \
         np.broadcast_to(np.asarray(coef, dtype=float), (n_run, len(STRUCTURED_TERMS)))
     a1, a2, b1, b2, k1, k3 = c.T
-    # the exact force tabulated once over the range where the sphere is partly submerged
-    # (a cubic in z: linear interpolation on 4001 nodes is exact to ~1e-7 N)
     r = float(setup.body.radius)
-    z_tab = np.linspace(-r, r, 4001)
-    f_tab = ExactHydrostatic(setup.body, ["Heave"], setup.stiffness).force(
-        make_history(np.arange(z_tab.size, dtype=float), z_tab, dof=["Heave"], check=False))[:, 0]
+    z_tab, f_tab = setup.hydrostatic_table()
     ss = setup.memory.ss
     ar, br, cr = ss.A, ss.B[:, 0], ss.C[0]
     m0 = setup.mass + setup.a_inf
@@ -528,10 +543,7 @@ def hydrostatic_polynomial(setup: KramerSetup) -> np.ndarray:
     The submerged volume of a sphere is a cubic in the draft, so a cubic through the exact
     force over the floating range ``|z| ≤ R`` reproduces it; checked here to 1e-9 of its size.
     """
-    r = float(setup.body.radius)
-    z = np.linspace(-r, r, 201)
-    f = ExactHydrostatic(setup.body, ["Heave"], setup.stiffness).force(
-        make_history(np.arange(z.size, dtype=float), z, dof=["Heave"], check=False))[:, 0]
+    z, f = setup.hydrostatic_table()
     poly = np.polyfit(z, f, 3)
     if np.max(np.abs(np.polyval(poly, z) - f)) > 1e-9 * np.max(np.abs(f)):
         raise SolverError("the exact hydrostatic force of this body is not a cubic in heave")
