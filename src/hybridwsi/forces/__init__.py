@@ -12,6 +12,7 @@ from hybridwsi.forces.base import (
     summed_linear_coefficients,
     total_known_force,
 )
+from hybridwsi.forces.drift import SlowDriftForce
 from hybridwsi.forces.external import ConstantForce, PrescribedForce
 from hybridwsi.forces.hydrostatics import ExactHydrostatic
 from hybridwsi.forces.linear import (
@@ -35,4 +36,5 @@ __all__ = [
     "PrescribedForce",
     "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
+    "SlowDriftForce",
 ]
