@@ -306,22 +306,24 @@ class StructuredResidual:
         return {"alpha": 0.0, "beta": float(-b_eq), "gamma": float(-self.coef[4])}
 
     def stability(self, setup: KramerSetup) -> Any:
-        """Predicted stability of the hybrid about equilibrium (a ``StabilityReport``).
+        """Predicted stability of the hybrid about equilibrium (a ``StabilityReport``, no Δt:
+        its ``stable`` is the continuous setting's).
 
         The residual linearised at zero amplitude (:meth:`linearised`) on the one-frequency
         Cummins model at the natural frequency ω = 2π/Te0, ``(m + A(ω)) z̈ + B(ω) ż + C z``:
         the radiation damping must be there, or any small negative b₁ (which B(ω) ≈ 14 N s/m
         absorbs) would be predicted unstable.
         """
-        from hybridwsi.diagnostic.stability import surrogate_stability
+        from hybridwsi.diagnostic.stability import CoupledStep, assess
         from hybridwsi.hydro import coefficients
 
         w = 2 * np.pi / setup.te0
         lin = self.linearised(0.0, w)
-        return surrogate_stability(
-            setup.mass, coefficients.at_frequency(setup.coeffs, "added_mass", w)[0, 0],
-            coefficients.at_frequency(setup.coeffs, "radiation_damping", w)[0, 0],
-            setup.stiffness, lin["alpha"], lin["beta"], lin["gamma"])
+        return assess(CoupledStep(
+            setup.mass, known_mass=coefficients.at_frequency(setup.coeffs, "added_mass", w),
+            known_damping=coefficients.at_frequency(setup.coeffs, "radiation_damping", w),
+            known_stiffness=setup.stiffness, alpha=lin["alpha"], beta=lin["beta"],
+            gamma=lin["gamma"]))
 
     def to_dict(self) -> dict[str, Any]:
         return {"coefficients": {k: float(c) for k, c in zip(STRUCTURED_TERMS, self.coef)},
