@@ -38,12 +38,13 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import version
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import (
     AddedMass,
@@ -1134,6 +1135,7 @@ def score_fold(held_out: str, fits: FoldFits, data: KramerData, settings: StudyS
         "published_rms": {c: m[c]["rms"] for c in codes},
         "published_beating_a_hybrid": beating,
         "best_rans": best_rans, "best_rans_rms": m[best_rans]["rms"] if best_rans else None,
+        "settings": asdict(settings), "hybridwsi_version": version(),
     }
     shown = ["physics", "physics_lead", "structured", "hybrid", LPF_REFERENCE,
              *([best_rans] if best_rans else [])]
