@@ -6,7 +6,8 @@ section "Ensembles and the network's capacity"):
 ``ensemble`` (leave one drop out, nothing chosen on the held-out drop)
     For each held-out drop H and each seed s, the network is trained exactly as shipped (one-step
     fit on the training drops' ``F_bb`` with ``seed=s``, then multi-step training on their heave
-    with H's nested-LOO iteration count ``NETWORK_HEAVE_ITERATIONS[H]`` and the release lead of
+    with H's nested-LOO iteration count (``kramer_hybrid.select_iterations``, as the study
+    selects it) and the release lead of
     the structured fit on the same two drops) and rolled out on H alone. The ensemble's residual
     force is the mean of the K networks' forces inside ONE rollout: the K MLPs are merged into
     one block-diagonal MLP of the same inputs (normalisation folded into its end layers, output
@@ -105,6 +106,22 @@ class Data:
         rows.append(row)
         return float(lead)
 
+    def iterations(self, rows: list[dict[str, Any]], fold: str) -> int:
+        """The fold's training length from the study's own nested selection (cached row)."""
+        hit = find(rows, kind="selection", fold=fold)
+        if hit:
+            return int(hit["iterations"])
+        c = clock()
+        if not hasattr(self, "_study_data"):
+            self._study_data, self._alone = kh.KramerData.load(self.setup), {}
+        sel = kh.select_iterations([d for d in kh.DROPS if d != fold], self._study_data,
+                                   kh.StudySettings(), self._alone)
+        row = {"kind": "selection", "fold": fold, "iterations": sel["selected_iterations"],
+               "inner_rms": sel["inner_rms"], "checkpoints": sel["checkpoints"], **since(c)}
+        append(row)
+        rows.append(row)
+        return int(row["iterations"])
+
     def score(self, t: np.ndarray, z: np.ndarray, drop: str) -> dict[str, float]:
         """Decay-table RMS, period and decay rate of a heave run [m] released at t = 0 [s]."""
         h0 = self.setup.drop_heights[drop]
@@ -113,12 +130,7 @@ class Data:
 
 def seeded_network(hists: list[Any], seed: int) -> Any:
     """``kramer_hybrid.fit_network`` with another seed (everything else as shipped)."""
-    shipped = kh.NETWORK
-    kh.NETWORK = {**shipped, "seed": int(seed)}
-    try:
-        return kh.fit_network(hists)
-    finally:
-        kh.NETWORK = shipped
+    return kh.fit_network(hists, seed=int(seed))
 
 
 def mean_network(nets: list[Any]) -> Any:
@@ -196,7 +208,7 @@ def run_ensemble(folds: list[str], seeds: list[int]) -> None:
     for fold in folds:
         train = [d for d in kh.DROPS if d != fold]
         lead = data.lead(rows, train)
-        iters = kh.NETWORK_HEAVE_ITERATIONS[fold]
+        iters = data.iterations(rows, fold)
         for seed in seeds:
             if find(rows, kind="single", fold=fold, seed=seed):
                 continue
