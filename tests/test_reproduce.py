@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import json
 import math
-
-import numpy as np
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from hybridwsi.cli import main
