@@ -254,15 +254,36 @@ def test_rotor_from_case_operating(tmp_path):
     src.to_netcdf(tmp_path / "tables" / "mine.nc")
     case["rotor"]["table"] = "tables/mine.nc"
     assert rotor_from_case(case, ["Surge"], case_dir=tmp_path).table.source.endswith("mine.nc")
-    with pytest.raises(InputError, match="file not found"):
+    with pytest.raises(InputError, match="rotor table not found"):
         rotor_from_case(case, ["Surge"])
-    case["rotor"]["table"] = "../data/rotor_nrel5mw.nc"
+    case["rotor"]["table"] = "rotor_nrel5mw.nc"  # the shipped one, by name
     for key, value, match in [("controller", "pid", "controller"),
                               ("wind_speed", 40.0, "outside"),
                               ("turbulence_intensity", -0.2, "turbulence")]:
         bad = {**case, "rotor": {**case["rotor"], key: value}}
         with pytest.raises(InputError, match=match):
             rotor_from_case(bad)
+
+
+def test_case_schema_takes_the_rotor_keys(tmp_path):
+    """The schema knows the operating rotor's keys (units converted: a tilt in rad becomes
+    deg) and refuses a wrong one with one line; a case file elsewhere finds its own table."""
+    from hybridwsi.cases import case_path
+
+    text = case_path("oc3_hywind").read_text()
+    text = text.replace('state = "parked"', 'state = "operating"', 1)
+    text = text.replace("shaft_tilt = 5.0 ", 'shaft_tilt = "0.0872664626 rad" ', 1)
+    text = text.replace('table = "rotor_nrel5mw.nc"', 'table = "mine.nc"', 1)
+    RotorTable.nrel_5mw().data.to_netcdf(tmp_path / "mine.nc")
+    (tmp_path / "spar.toml").write_text(text)
+    case = load_case(tmp_path / "spar.toml")
+    assert case["rotor"]["shaft_tilt"] == pytest.approx(5.0)
+    rotor = rotor_from_case(case, ["Surge", "Pitch"])
+    assert rotor.table.source == str(tmp_path / "mine.nc")
+    (tmp_path / "bad.toml").write_text(text.replace('controller = "quasi-steady"',
+                                                    'controller = "lqr"', 1))
+    with pytest.raises(InputError, match="rotor.controller"):
+        load_case(tmp_path / "bad.toml")
 
 
 def test_bad_table_is_refused(tmp_path, table):

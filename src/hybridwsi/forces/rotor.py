@@ -47,7 +47,6 @@ modelled.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -219,7 +218,9 @@ class RotorTable:
     @classmethod
     def nrel_5mw(cls) -> RotorTable:
         """The shipped NREL 5-MW table (``hybridwsi/data/rotor_nrel5mw.nc``)."""
-        return cls.from_file(Path(str(resources.files("hybridwsi") / "data" / DEFAULT_TABLE)))
+        from hybridwsi.files import DATA
+
+        return cls.from_file(DATA / DEFAULT_TABLE)
 
     @property
     def range(self) -> tuple[float, float]:
@@ -708,10 +709,12 @@ def wind_from_case(table: Mapping[str, Any], hub_height: float) -> SteadyWind | 
 
 
 def _table_path(table: Mapping[str, Any], case_dir: str | Path | None) -> Path:
-    """``[rotor] table`` relative to the case file's folder (built-in cases: the package's)."""
-    base = Path(case_dir) if case_dir is not None else Path(str(resources.files("hybridwsi.cases")))
-    name = table.get("table")
-    return base / name if name else Path(str(resources.files("hybridwsi") / "data" / DEFAULT_TABLE))
+    """``[rotor] table``: a file shipped in ``hybridwsi/data`` or a path relative to the case
+    file's folder (default: the shipped NREL 5-MW table)."""
+    from hybridwsi.files import data_path
+
+    return data_path(table.get("table", DEFAULT_TABLE),
+                     Path(case_dir) if case_dir is not None else None, "rotor table")
 
 
 def rotor_from_case(case: Mapping[str, Any], dofs: Sequence[str] | str | None = None, *,
@@ -746,6 +749,7 @@ def rotor_from_case(case: Mapping[str, Any], dofs: Sequence[str] | str | None = 
     if "hub" not in table:
         raise InputError("rotor: state 'operating' needs hub [m] in [rotor]")
     tilt = np.radians(_finite("shaft_tilt", table.get("shaft_tilt", 0.0)))
+    case_dir = case_dir if case_dir is not None else getattr(case, "directory", None)
     curve = RotorTable.from_file(_table_path(table, case_dir))
     wind = wind_from_case(table, _point("hub", hub)[2])
     kw = dict(reference_point=ref, shaft_tilt=tilt,
