@@ -1,6 +1,6 @@
 """The wind turbine rotor as a force component: parked, a constant thrust, or operating.
 
-Three models:
+Four models:
 
 - :class:`ParkedRotor` (the default): no aerodynamic force at all (blades feathered, no wind).
   Its mass and inertia are part of the rigid assembly, not of this component.
@@ -9,7 +9,8 @@ Three models:
   point; the hub moves with the platform, small-angle rigid kinematics about the reference
   point O: ``v_hub = Surge' + Pitch' r_z − Yaw' r_y`` with ``r = hub − O``; force
   ``Q = j (T − B_aero jᵀż)`` with ``j = (1, 0, 0, 0, r_z, −r_y)``).
-- :class:`OperatingRotor`: the NREL 5-MW rotor in steady or turbulent wind. The thrust and
+- :class:`OperatingRotor` (and :class:`PIControlledRotor`): the NREL 5-MW rotor in steady or
+  turbulent wind. The thrust and
   torque of its steady operating curve (:class:`RotorTable`, from CCBlade with the baseline
   torque and pitch controller, ``scripts/rotor_table.py``) evaluated at the rotor-relative wind
   speed ``U_rel = U(t) − s·v_hub``: the wind (:mod:`hybridwsi.wind`) minus the hub's velocity
@@ -23,25 +24,31 @@ Three models:
   so the mean wind gives a mean force (the mean offset) and the slope of the curve an
   aerodynamic damping ``B = T'(U) j_T j_Tᵀ + Q'(U) j_Q j_Tᵀ`` (``linear_coefficients``).
 
-Controller model (``controller = "quasi-steady"``, the only one): the rotor speed and blade
-pitch follow the wind as in steady state at every instant, so the thrust follows the
-operating curve T(U) and its slope dT/dU *along the curve* is the aerodynamic damping. Below
-rated (8 m/s: dT/dU = +95.6 kN s/m) that is positive damping; above rated the pitch
-controller holds the power, the thrust falls with the wind speed and dT/dU < 0 (18 m/s:
-−18.7 kN s/m; just above rated, 11.3–11.6 m/s, −520 to −160 kN s/m): the negative
-aerodynamic damping of pitch-controlled floating turbines (Larsen & Hanson 2007, J. Phys.
-Conf. Ser. 75 012073; Jonkman 2008, AIAA 2008-1306). Why this model: it is the exact
-low-frequency limit of any controller with integral action, and the platform's surge mode
-(0.05 rad/s) lies far below the pitch controller's bandwidth (0.6 rad/s for the baseline
-gains, 0.2 rad/s for the OC3-Hywind detuned ones); for the pitch mode (0.21 rad/s) it is the
-worst case, the one a controller tuned above the platform frequency approaches (the reason
-OC3-Hywind detunes its controller). What it leaves out: rotor-speed and pitch dynamics (the
-frozen slope ∂T/∂U at fixed speed and pitch, +78.5 kN s/m at 18 m/s, that a fast motion would
-see), dynamic inflow, rotational sampling, tower and blade flexibility, gyroscopic moments,
-the 0.4 % of 1/cos(tilt) between the shaft-axis and horizontal wind speeds. Outside the
-table (2–30 m/s relative wind: the curve continued past cut-in 3 m/s and cut-out 25 m/s)
-the component refuses the state (:class:`~hybridwsi.errors.SolverError`): shut-down is not
-modelled.
+Two controller models (docs/OC3_HYWIND.md "The rotor" compares them with RAFT):
+
+- ``controller = "quasi-steady"`` (:class:`OperatingRotor`): the rotor speed and blade pitch
+  follow the wind as in steady state at every instant, so the thrust follows the operating
+  curve T(U) and its slope dT/dU *along the curve* is the aerodynamic damping. Below rated
+  (8 m/s: +95.6 kN s/m) positive; above rated the pitch controller holds the power, the
+  thrust falls with the wind speed and dT/dU < 0 (18 m/s: −18.7 kN s/m; 11.3–11.6 m/s: −520
+  to −160): the negative aerodynamic damping of pitch-controlled floating turbines (Larsen &
+  Hanson 2007, J. Phys. Conf. Ser. 75 012073; Jonkman 2008, AIAA 2008-1306). It is the exact
+  low-frequency limit of any controller with integral action — right for surge (0.05 rad/s,
+  far below the pitch controller's bandwidth) and the worst case for the pitch mode (0.21
+  rad/s). Memoryless, with a Numba kernel.
+- ``controller = "pi"`` (:class:`PIControlledRotor`): the rotor speed from the rigid
+  drivetrain, the DISCON generator-torque law and the gain-scheduled PI pitch law
+  (:mod:`hybridwsi.forces.controller`; OC3-Hywind's detuned gains by default), the thrust from
+  CCBlade's coefficient surfaces: the controller lags fast motion, so the damping depends on
+  frequency — the operating-curve slope for slow motion, the frozen ∂T/∂U (+78.5 kN s/m at
+  18 m/s) for fast motion; with the detuned gains the pitch mode is damped (+16 kN s/m at
+  0.21 rad/s and 18 m/s) where the quasi-steady model undamps it. Three internal states.
+
+Both leave out dynamic inflow, rotational sampling, tower and blade flexibility, gyroscopic
+moments and the 0.4 % of 1/cos(tilt) between the shaft-axis and horizontal wind speeds.
+Outside the table (2–30 m/s relative wind: the curve continued past cut-in 3 m/s and cut-out
+25 m/s) the component refuses the state (:class:`~hybridwsi.errors.SolverError`): shut-down
+is not modelled.
 """
 
 from __future__ import annotations
@@ -294,24 +301,21 @@ class OperatingRotor(KnownComponent):
         τ [rad], the shaft's upward tilt at the rotor (NREL 5-MW: 5 deg).
     torque_reaction : bool
         Include the moment ``Q s`` of the shaft torque on the nacelle.
-    controller : {"quasi-steady"}
-        How rotor speed and pitch follow the wind (module docstring).
     """
 
     name = "operating_rotor"
+    #: how rotor speed and pitch follow the wind (module docstring)
+    controller = "quasi-steady"
 
     def __init__(self, table: RotorTable, wind: SteadyWind | TurbulentWind,
                  hub: Sequence[float], dofs: Sequence[str] | str = RIGID_DOFS, *,
                  reference_point: Sequence[float] = (0.0, 0.0, 0.0), shaft_tilt: float = 0.0,
-                 torque_reaction: bool = True, controller: str = "quasi-steady") -> None:
+                 torque_reaction: bool = True) -> None:
         if not isinstance(table, RotorTable):
             raise InputError("rotor: table must be a RotorTable")
         if not isinstance(wind, (SteadyWind, TurbulentWind)):
             raise InputError("rotor: wind must be a hybridwsi.wind.SteadyWind or TurbulentWind")
-        if controller not in CONTROLLERS:
-            raise InputError(f"rotor: controller must be one of {list(CONTROLLERS)}, "
-                             f"got {controller!r}")
-        self.table, self.wind, self.controller = table, wind, controller
+        self.table, self.wind = table, wind
         self.hub = _point("hub", hub)
         self.reference_point = _point("reference_point", reference_point)
         self.shaft_tilt = _finite("shaft_tilt", shaft_tilt)
@@ -516,6 +520,7 @@ class PIControlledRotor(OperatingRotor):
     """
 
     name = "pi_controlled_rotor"
+    controller = "pi"
     n_states = 3
 
     def __init__(self, table: RotorTable, wind: SteadyWind | TurbulentWind,
@@ -524,7 +529,7 @@ class PIControlledRotor(OperatingRotor):
                  filter_hz: float = 0.25, reference_point: Sequence[float] = (0.0, 0.0, 0.0),
                  shaft_tilt: float = 0.0, torque_reaction: bool = True) -> None:
         super().__init__(table, wind, hub, dofs, reference_point=reference_point,
-                         shaft_tilt=shaft_tilt, torque_reaction=torque_reaction, controller="pi")
+                         shaft_tilt=shaft_tilt, torque_reaction=torque_reaction)
         self.aero = RotorAerodynamics(table)
         self.pi, self.law = pitch_control, torque_law
         self.inertia = number("rotor: drivetrain_inertia", drivetrain_inertia, positive=True)
@@ -755,8 +760,11 @@ def rotor_from_case(case: Mapping[str, Any], dofs: Sequence[str] | str | None = 
     kw = dict(reference_point=ref, shaft_tilt=tilt,
               torque_reaction=bool(table.get("torque_reaction", True)))
     controller = str(table.get("controller", "quasi-steady"))
-    if controller != "pi":
-        return OperatingRotor(curve, wind, hub, dofs, controller=controller, **kw)
+    if controller not in CONTROLLERS:
+        raise InputError(f"rotor: controller must be one of {list(CONTROLLERS)}, "
+                         f"got {controller!r}")
+    if controller == "quasi-steady":
+        return OperatingRotor(curve, wind, hub, dofs, **kw)
     if "drivetrain_inertia" not in table:
         raise InputError("rotor: controller 'pi' needs drivetrain_inertia [kg m^2] in [rotor]")
     return PIControlledRotor(
