@@ -116,6 +116,24 @@ def read_netcdf(path: str | os.PathLike) -> xr.Dataset:
     return ds
 
 
+#: folder of the files shipped with the package (coefficients, force tables)
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def data_path(name: str | os.PathLike, folder: Path | None = None, what: str = "file") -> Path:
+    """Where a table named in a case lives: an absolute path, a path relative to ``folder``
+    (the case file's), to the working directory, or the name of a file shipped in
+    ``hybridwsi/data``; InputError naming ``what`` and the places looked at otherwise."""
+    path = Path(name).expanduser()
+    candidates = [path] if path.is_absolute() else (
+        ([folder / path] if folder is not None else []) + [Path.cwd() / path, DATA / path])
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate
+    raise InputError(f"{what} not found: {name} (looked for "
+                     f"{', '.join(str(c) for c in candidates)})")
+
+
 def _nearest_existing(path: Path) -> Path:
     """``path`` itself or its closest ancestor that exists (the folder a write would create from)."""
     for candidate in (path, *path.parents):

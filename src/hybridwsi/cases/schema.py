@@ -549,6 +549,43 @@ _MOORING = Table(fields={
         "K": ListOf(item=ListOf(item=Number(unit=None), length=6), length=6,
                     doc="-dF/dq [SI per DOF pair]")}, doc="published values, for tests")})
 
+_ROTOR = Table(fields={
+    "state": Text(choices=("parked", "thrust", "operating"), default="parked",
+                  doc="parked: no force; thrust: a constant thrust and damping; operating: the "
+                      "rotor in the wind below (docs/OC3_HYWIND.md, The rotor)"),
+    "hub": _vec3("m", "rotor apex: where thrust and shaft torque act"),
+    "thrust": Number(unit="N", doc="state thrust: mean thrust along +X"),
+    "aero_damping": Number(unit="N s/m", default=0.0,
+                           doc="state thrust: linear damping on the hub's fore-aft velocity"),
+    "table": Text(doc="operating curve (NetCDF of scripts/rotor_table.py): a file shipped in "
+                      "hybridwsi/data, or a path relative to the case file"),
+    "shaft_tilt": Number(unit="deg", default=0.0, doc="shaft tilt: the thrust's direction"),
+    "controller": Text(choices=("quasi-steady", "pi"), default="quasi-steady",
+                       doc="quasi-steady: speed and pitch follow the operating curve at once; "
+                           "pi: drivetrain + torque law + PI pitch (3 states)"),
+    "torque_reaction": Boolean(default=True, doc="the shaft torque's moment on the nacelle"),
+    "wind_speed": nonnegative("m/s", "mean hub-height wind"),
+    "turbulence_intensity": nonnegative("", "sigma/U; 0: steady wind, > 0: Kaimal (IEC)",
+                                        default=0.0),
+    "wind_seed": integer(0, "seed of the turbulent wind's phases", default=0),
+    "wind_period": positive("s", "the turbulent wind repeats after this", default=3600.0),
+    "wind_dt": positive("s", "sample step of the turbulent wind", default=0.25),
+    "rotor_averaged": Boolean(default=True, doc="disk-averaged wind (IEC coherence), else "
+                                                "the hub point's"),
+    "rotor_radius": positive("m", "radius of the disk average", default=63.0),
+    "pi_gains": Text(choices=("oc3_detuned", "baseline"), default="oc3_detuned",
+                     doc="controller pi: PI gains on generator speed (forces/controller.py)"),
+    "pitch_kp": positive("s", "controller pi: proportional gain (overrides pi_gains)"),
+    "pitch_ki": positive("", "controller pi: integral gain (overrides pi_gains)"),
+    "pitch_theta_k": positive("deg", "controller pi: pitch where the gain halves",
+                              default=6.302336),
+    "torque_region3": Text(choices=("constant_torque", "constant_power"),
+                           default="constant_torque",
+                           doc="controller pi: generator torque above rated"),
+    "drivetrain_inertia": positive("kg m^2", "controller pi: rotor-side inertia"),
+    "speed_filter_hz": positive("Hz", "controller pi: generator-speed filter", default=0.25)},
+    doc="forces/rotor.py")
+
 #: mooring models: the MoorDyn lines, MoorPy solved at every call, MoorPy's interpolant
 MOORING_MODELS = ("moordyn", "quasi-static", "table")
 _FORCES = Table(fields={
@@ -590,14 +627,7 @@ CASE = Table(fields={
                   exclusive=(("strip_length", "n_strips"),),
                   doc="Morison strips along the hull profile"),
     "mooring": _MOORING,
-    "rotor": Table(fields={
-        "state": Text(choices=("parked", "thrust"), default="parked",
-                      doc="parked: no force; thrust: the two numbers below"),
-        "hub": _vec3("m", "where the thrust acts"),
-        "thrust": Number(unit="N", doc="mean thrust along +X"),
-        "aero_damping": Number(unit="N s/m", default=0.0,
-                               doc="linear damping on the hub's fore-aft velocity")},
-        doc="forces/rotor.py"),
+    "rotor": _ROTOR,
     "drift": Table(fields={
         "table": Text(required=True,
                       doc="mean drift coefficients (NetCDF of hydro.drift.drift_table): a file "

@@ -28,7 +28,14 @@ from hybridwsi.forces.moordyn import MoorDynForce
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
 from hybridwsi.forces.morison import MorisonDrag, Strips, additional_damping, profile_strips
 from hybridwsi.forces.radiation import RadiationMemory
-from hybridwsi.forces.rotor import ParkedRotor, RotorThrust, rotor_from_case
+from hybridwsi.forces.rotor import (
+    OperatingRotor,
+    ParkedRotor,
+    PIControlledRotor,
+    RotorTable,
+    RotorThrust,
+    rotor_from_case,
+)
 
 __all__ = [
     "KnownComponent", "as_matrix", "black_box_force", "kinematic", "summed_linear_coefficients",
@@ -37,6 +44,7 @@ __all__ = [
     "PrescribedForce",
     "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem",
     "MooringTable",
-    "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
+    "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust",
+    "OperatingRotor", "PIControlledRotor", "RotorTable", "rotor_from_case",
     "SlowDriftForce",
 ]

@@ -196,6 +196,59 @@ def rotor_force(thrust: float, aero_damping: float, lever: np.ndarray) -> Compil
                          np.zeros(0, dtype=np.int64))
 
 
+def _operating_rotor(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
+    # idata = [n_dof, n_table, n_wind]; fdata = [wind dt, j_T (n), j_Q (n), U (n_table),
+    # T (n_table), Q (n_table), wind samples (n_wind)]: OperatingRotor.ode_force
+    n, nu, nw = idata[0], idata[1], idata[2]
+    jt, jq = 1, 1 + n
+    ug = 1 + 2 * n
+    tg, qg, ws = ug + nu, ug + 2 * nu, ug + 3 * nu
+    x = t / fdata[0]  # periodic linear interpolation of the wind (wind.periodic_interp)
+    k = math.floor(x)
+    w = x - k
+    i = int(k) % nw
+    wind = fdata[ws + i] * (1.0 - w) + fdata[ws + (i + 1) % nw] * w
+    v = 0.0
+    for m in range(n):
+        v += zdot[m] * fdata[jt + m]
+    u = wind - v
+    if not (fdata[ug] <= u <= fdata[ug + nu - 1]):
+        return OUTSIDE_TABLE
+    lo, hi = 0, nu - 1  # bisection: fdata[ug + lo] <= u <= fdata[ug + hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if fdata[ug + mid] <= u:
+            lo = mid
+        else:
+            hi = mid
+    f = (u - fdata[ug + lo]) / (fdata[ug + hi] - fdata[ug + lo])
+    thrust = fdata[tg + lo] + f * (fdata[tg + hi] - fdata[tg + lo])
+    torque = fdata[qg + lo] + f * (fdata[qg + hi] - fdata[qg + lo])
+    for m in range(n):
+        out[m] = thrust * fdata[jt + m] + torque * fdata[jq + m]
+    return 0
+
+
+operating_rotor_kernel = _kernel(_operating_rotor)
+
+
+def operating_rotor_force(speeds: np.ndarray, thrust: np.ndarray, torque: np.ndarray,
+                          lever: np.ndarray, torque_lever: np.ndarray, wind_dt: float,
+                          wind: np.ndarray) -> CompiledForce | None:
+    """``T(U_rel) j_T + Q(U_rel) j_Q`` [N, N m] with ``U_rel = U(t) − j_Tᵀ ż`` [m/s]: the
+    tabulated operating curve (``speeds`` increasing, linear interpolation) and the wind's
+    periodic samples (step ``wind_dt`` [s]) of
+    :class:`hybridwsi.forces.rotor.OperatingRotor`."""
+    if not HAVE_NUMBA:
+        return None
+    lo, hi = float(speeds[0]), float(speeds[-1])
+    return CompiledForce(
+        operating_rotor_kernel,
+        _floats([wind_dt], lever, torque_lever, speeds, thrust, torque, wind),
+        _ints([len(lever), len(speeds), len(wind)]),
+        {OUTSIDE_TABLE: f"rotor: relative wind speed outside the table [{lo:g}, {hi:g}] m/s"})
+
+
 # ------------------------------------------------------------------------------- mooring
 def _mooring(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     # idata = [n_dof, n_lines, nh, nv, dof index × n_dof]

@@ -36,21 +36,12 @@ from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent
 from hybridwsi.waves import Wave, components_within, harmonic_sum, ramp_factor
 
-#: folder of the shipped tables (``[drift] table`` names a file there, or a path)
-DATA = Path(__file__).resolve().parent.parent / "data"
-
-
 def table_path(table: str | Path, folder: Path | None = None) -> Path:
     """Where a drift table named in a case lives: an absolute path, a path relative to
     ``folder`` (the case file's), or the name of a file shipped in ``hybridwsi/data``."""
-    path = Path(table).expanduser()
-    candidates = [path] if path.is_absolute() else (
-        ([folder / path] if folder is not None else []) + [Path.cwd() / path, DATA / path])
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate
-    raise InputError(f"drift table not found: {table} (looked for "
-                     f"{', '.join(str(c) for c in candidates)})")
+    from hybridwsi.files import data_path
+
+    return data_path(table, folder, "drift table")
 
 
 def load_table(table: str | Path | xr.Dataset, folder: Path | None = None) -> xr.Dataset:

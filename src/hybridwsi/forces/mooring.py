@@ -477,7 +477,7 @@ def _spans(anchors: np.ndarray, fairleads: np.ndarray, q: np.ndarray
     return np.hypot(d[..., 0], d[..., 1]), d[..., 2]
 
 
-def _bicubic_patches(x: np.ndarray, y: np.ndarray, values: np.ndarray) -> np.ndarray:
+def bicubic_patches(x: np.ndarray, y: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Coefficients ``a[cell, p, q]`` of ``f = sum a u^p v^q`` on each cell of a uniform grid.
 
     C1 bicubic Hermite patches with the node values and derivatives of the interpolating cubic
@@ -567,7 +567,7 @@ class MooringTable:
         self._origin = (float(l_h[0]), float(l_v[0]))
         self._step = (float(l_h[1] - l_h[0]), float(l_v[1] - l_v[0]))
         self._n = (l_h.size - 1, l_v.size - 1)
-        patches = np.stack([_bicubic_patches(l_h, l_v, dataset[name].values)
+        patches = np.stack([bicubic_patches(l_h, l_v, dataset[name].values)
                             for name in ("horizontal_force", "vertical_force")], axis=2)
         flat = patches.reshape(self._n[0] * self._n[1], 32)  # cell -> (H 16, V 16)
         self._cells_flat = np.ascontiguousarray(flat)  # (n_cells, 32): the compiled kernel
