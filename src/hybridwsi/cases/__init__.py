@@ -3,7 +3,9 @@
 ``load_case("paper_sphere")`` returns the dict of ``paper_sphere.toml``: the floating sphere of
 the paper, its BEM configuration, the regular-wave case (T = 0.75 s, H = 0.05 m) and the paper's
 Table 1 values; ``load_case("kramer2021_decay")`` the decay experiment of Kramer et al. (2021);
-``load_case("oc3_hywind")`` the OC3-Hywind spar with the NREL 5-MW turbine (docs/OC3_HYWIND.md).
+``load_case("oc3_hywind")`` the OC3-Hywind spar with the NREL 5-MW turbine (docs/OC3_HYWIND.md);
+``load_case("oc4_semi")`` the OC4-DeepCwind semi-submersible with the same turbine
+(docs/OC4_SEMI.md).
 
 From a case dict, :func:`body_from_case` builds its floating body and :func:`bem_arguments`
 the keyword arguments of :func:`hybridwsi.hydro.bem.compute` (``[bem]`` or ``[bem_quick]``).
@@ -152,6 +154,19 @@ def frequencies(cfg: Mapping[str, Any]) -> np.ndarray:
     raise InputError(f"[bem] spacing must be 'geometric' or 'blend', got {spacing!r}")
 
 
+def wave_directions(degrees: Any, table: str = "bem") -> tuple[float, ...]:
+    """Wave directions [rad] from a ``wave_directions_deg`` list [deg] (direction the waves
+    travel to, from +X towards +Y)."""
+    try:
+        deg = np.atleast_1d(np.asarray(degrees, dtype=float))
+    except (TypeError, ValueError):
+        deg = np.array([np.nan])
+    if deg.ndim != 1 or deg.size == 0 or not np.all(np.isfinite(deg)):
+        raise InputError(f"[{table}] wave_directions_deg must be a list of angles [deg], "
+                         f"got {degrees!r}")
+    return tuple(float(v) for v in np.radians(deg))
+
+
 def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]:
     """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` for a case:
     ``compute(**bem_arguments(case))``.
@@ -166,20 +181,23 @@ def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]
     Returns
     -------
     dict
-        ``body`` (:func:`body_from_case`), ``omega`` (:func:`frequencies`) and the table's
+        ``body`` (:func:`body_from_case`), ``omega`` (:func:`frequencies`), the table's
         entries among :data:`BEM_KEYS` (``water_depth`` defaults to the environment's, else
-        infinite).
+        infinite) and ``wave_directions`` [rad] from ``wave_directions_deg`` [deg] (absent:
+        compute's default, head seas 0).
     """
     cfg = case.get(table)
     if not isinstance(cfg, Mapping):
         raise InputError(f"case {case.get('name', '?')!r} has no [{table}] table")
     unknown = set(cfg) - set(BEM_KEYS) - {"omega_min", "omega_max", "n_omega", "spacing",
-                                          "omega_blend"}
+                                          "omega_blend", "wave_directions_deg"}
     if unknown:
         raise InputError(f"[{table}] has unknown keys {sorted(unknown)}")
     args = {k: cfg[k] for k in BEM_KEYS if k in cfg}
     args.setdefault("water_depth", case.get("environment", {}).get("water_depth", math.inf))
     if "dofs" in args:
         args["dofs"] = tuple(args["dofs"])
+    if "wave_directions_deg" in cfg:
+        args["wave_directions"] = wave_directions(cfg["wave_directions_deg"], table)
     return {"body": body_from_case(case), "omega": frequencies(cfg), **args}
 
