@@ -183,7 +183,7 @@ def test_mesh_hydrostatics_follow_the_exact_ones(body):
 def test_bem_tables_of_the_case():
     args = bem_arguments(CASE)
     assert args["wave_directions"] == pytest.approx(np.radians([0.0, 30.0, 60.0]))
-    assert args["water_depth"] == 200.0 and args["panel_size"] == 1.0
+    assert args["water_depth"] == 200.0 and args["panel_size"] == 1.25
     assert bem_arguments(CASE, "bem_quick")["panel_size"] == 3.0
     with pytest.raises(InputError, match="wave_directions_deg"):
         bem_arguments({**CASE, "bem": {**CASE["bem"], "wave_directions_deg": ["x"]}})

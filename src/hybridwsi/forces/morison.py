@@ -1,4 +1,5 @@
-"""Viscous drag on a vertical body of revolution by Morison strip theory, and the additional
+"""Morison's equation: strip drag on a vertical body of revolution (the spar), on a frame of
+cylindrical members in 6 DOFs (the semi-submersible, :class:`MemberMorison`), and the additional
 linear damping of a case.
 
 :class:`MorisonDrag` is the drag term of Morison's equation on a vertical axisymmetric body
@@ -58,7 +59,7 @@ from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.linear import LinearDamping
-from hybridwsi.waves import AiryKinematics, Wave
+from hybridwsi.waves import AiryKinematics, AiryPoints, Wave
 
 #: default strip length [m] (OC3: 120 strips along the 120 m draft; pure surge is exact for
 #: any length, the pitch-rate moment within 3.5e-5 of 2400 strips; docs/OC3_HYWIND.md)
@@ -400,3 +401,292 @@ def additional_damping(case: Mapping[str, Any], dofs: Sequence[str] | str | None
         raise InputError("additional damping must be finite and >= 0")
     idx = index(dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS))
     return LinearDamping(np.diag(diag)[np.ix_(idx, idx)])
+
+
+# ============================================================================================
+# Morison's equation on a frame of cylindrical members (semi-submersibles)
+# ============================================================================================
+@dataclass(frozen=True)
+class MemberElements:
+    """Strip elements and axial end discs of the submerged parts of cylindrical members.
+
+    Attributes
+    ----------
+    centre, tangent : ndarray, shape (n, 3)
+        Element centres [m] (global frame at rest) and unit axis directions.
+    length, diameter, cd, ca : ndarray, shape (n,)
+        Element length [m], diameter [m], transverse drag and added-mass coefficients [-].
+    inertia : ndarray of bool, shape (n,)
+        Morison inertia (added mass and wave inertia) on this element: the members outside
+        the potential-flow model (``potential = false``).
+    end_centre, end_axis : ndarray, shape (m, 3)
+        Centres [m] and unit normals of the end discs with an axial drag coefficient.
+    end_area, end_cd : ndarray, shape (m,)
+        Disc areas π D²/4 [m²] and axial drag coefficients [-].
+    member : tuple of str
+        Member name of each element.
+    """
+
+    centre: np.ndarray
+    tangent: np.ndarray
+    length: np.ndarray
+    diameter: np.ndarray
+    cd: np.ndarray
+    ca: np.ndarray
+    inertia: np.ndarray
+    end_centre: np.ndarray
+    end_axis: np.ndarray
+    end_area: np.ndarray
+    end_cd: np.ndarray
+    member: tuple[str, ...]
+
+    @property
+    def volume(self) -> np.ndarray:
+        """Element volumes π D²/4 l [m³]."""
+        return 0.25 * math.pi * self.diameter**2 * self.length
+
+
+def _coefficient(data: Mapping[str, Any], key: str, count: int) -> np.ndarray:
+    """A member's Morison coefficient(s) ``key`` (default 0) as ``count`` finite values >= 0."""
+    raw = data.get(key, 0.0)
+    try:
+        value = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        value = np.array([np.nan])
+    if value.ndim == 0:
+        value = np.full(count, float(value))
+    if value.shape != (count,) or not np.all(np.isfinite(value)) or np.any(value < 0):
+        raise InputError(f"member {data.get('name')!r}: {key} must be {count} finite value(s) "
+                         f">= 0, got {raw!r}")
+    return value
+
+
+def member_elements(members: Sequence[Mapping[str, Any]],
+                    element_length: float = DEFAULT_STRIP_LENGTH) -> MemberElements:
+    """Cut the submerged part of each member into equal elements of length <= ``element_length``.
+
+    ``members``: case entries (``name``, ``ends``, ``diameter``, ``potential``; Morison ``cd``,
+    ``ca`` transverse and ``axial_cd`` = [end 1, end 2], all default 0). Dry members and dry
+    ends give nothing; a member cut by the free surface keeps its wet part.
+    """
+    from hybridwsi.bodies import Member
+
+    if not (math.isfinite(element_length) and element_length > 0):
+        raise InputError(f"Morison: element_length must be > 0 [m], got {element_length}")
+    rows, ends = [], []
+    for data in members:
+        m = Member.from_dict(dict(data))
+        cd, ca = _coefficient(data, "cd", 1)[0], _coefficient(data, "ca", 1)[0]
+        axial = _coefficient(data, "axial_cd", 2)
+        seg = m.submerged_axis()
+        if seg is None:
+            continue
+        a, b = seg
+        span = float(np.linalg.norm(b - a))
+        n = max(1, math.ceil(span / element_length - 1e-9))
+        t = (b - a) / span
+        for k in range(n):
+            rows.append(((a + (k + 0.5) / n * (b - a)), t, span / n, m.diameter, cd, ca,
+                         not m.potential, m.name))
+        axis = (np.asarray(m.ends[1]) - np.asarray(m.ends[0])) / math.dist(*m.ends)
+        for k, end in enumerate(m.ends):
+            if axial[k] > 0 and end[2] < 0:
+                ends.append((np.asarray(end, float), axis, 0.25 * math.pi * m.diameter**2,
+                             axial[k]))
+    if not rows:
+        raise InputError("Morison: no member is below the still-water level")
+    col = list(zip(*rows))
+    ecol = list(zip(*ends)) if ends else [np.zeros((0, 3)), np.zeros((0, 3)), (), ()]
+    return MemberElements(
+        centre=np.array(col[0]), tangent=np.array(col[1]), length=np.array(col[2]),
+        diameter=np.array(col[3]), cd=np.array(col[4]), ca=np.array(col[5]),
+        inertia=np.array(col[6], dtype=bool), member=tuple(col[7]),
+        end_centre=np.array(ecol[0]).reshape(-1, 3), end_axis=np.array(ecol[1]).reshape(-1, 3),
+        end_area=np.array(ecol[2], dtype=float), end_cd=np.array(ecol[3], dtype=float))
+
+
+def point_jacobians(points: np.ndarray, reference_point: Sequence[float] = (0.0, 0.0, 0.0)
+                    ) -> np.ndarray:
+    """(n, 3, 6): velocity of each point per unit DOF rate, ``v = v_O + ω × r`` (small angles),
+    ``r`` from the reference point O; its transpose maps a point force to forces and moments
+    about O."""
+    r = np.asarray(points, dtype=float) - np.asarray(reference_point, dtype=float)
+    jac = np.zeros((r.shape[0], 3, 6))
+    jac[:, 0, 0] = jac[:, 1, 1] = jac[:, 2, 2] = 1.0
+    # ω × r = -r × ω: rows of -[r×]
+    jac[:, 0, 4], jac[:, 0, 5] = r[:, 2], -r[:, 1]
+    jac[:, 1, 3], jac[:, 1, 5] = -r[:, 2], r[:, 0]
+    jac[:, 2, 3], jac[:, 2, 4] = r[:, 1], -r[:, 0]
+    return jac
+
+
+class MemberMorison(KnownComponent):
+    """Morison's equation on every member of a frame, in 6 DOFs, on the relative velocity.
+
+    Per element ``k`` (centre r_k, axis t_k, length l_k, diameter D_k) and per end disc ``e``
+    (area A_e, normal n_e), with ``u = u_wave − v`` the relative velocity and
+    ``u_n = (1 − t tᵀ) u`` its part normal to the axis:
+
+        transverse drag   dF = ½ ρ Cd D l |u_n| u_n
+        axial end drag    dF = ½ ρ Cd_ax A |u·n| (u·n) n       (heave plates)
+        inertia           dF = ρ (1 + Ca) V (1 − t tᵀ) a_wave − ρ Ca V (1 − t tᵀ) a_body
+
+    The inertia terms act only on members outside the potential-flow model (``potential =
+    false``: pontoons and braces), whose added mass and wave inertia the BEM does not hold;
+    the columns get drag only. The body acceleration part is the constant added-mass matrix
+    ``A_m = Σ ρ Ca V Jᵀ (1 − t tᵀ) J`` returned by :meth:`linear_coefficients` (moved to the
+    left-hand side of the ODE). Forces and moments about the reference point: ``Q = Σ Jᵀ dF``
+    (:func:`point_jacobians`). Small motions: elements stay at their rest positions, no drag
+    above the still-water level, no wave stretching.
+
+    Parameters
+    ----------
+    elements : MemberElements
+        :func:`member_elements`.
+    rho : float
+        Water density [kg/m³].
+    dofs : sequence of str
+        DOFs of the histories and ODE states (others held at rest).
+    reference_point : (3,) floats
+        O [m].
+    wave : hybridwsi.waves.Wave, optional
+        Linear Airy kinematics of this wave (off: still water).
+    water_depth, g, ramp : float
+        Depth [m], gravity [m/s²] and half-cosine ramp [s] of the wave kinematics.
+    """
+
+    name = "member_morison"
+
+    def __init__(self, elements: MemberElements, rho: float,
+                 dofs: Sequence[str] | str = RIGID_DOFS, *,
+                 reference_point: Sequence[float] = (0.0, 0.0, 0.0), wave: Wave | None = None,
+                 water_depth: float = math.inf, g: float = 9.81, ramp: float = 0.0) -> None:
+        if not (math.isfinite(rho) and rho > 0):
+            raise InputError(f"Morison: rho must be > 0, got {rho}")
+        self.elements, self.rho = elements, float(rho)
+        self.dofs = check_dofs(dofs)
+        idx = index(self.dofs)
+        e = elements
+        self._jac = point_jacobians(e.centre, reference_point)[:, :, idx]
+        self._jac_end = point_jacobians(e.end_centre, reference_point)[:, :, idx]
+        self._t = e.tangent
+        #: ½ ρ Cd D l per element and ½ ρ Cd_ax A per end disc [kg/m]
+        self.coef = 0.5 * self.rho * e.cd * e.diameter * e.length
+        self.coef_end = 0.5 * self.rho * e.end_cd * e.end_area
+        inertia_volume = np.where(e.inertia, e.volume, 0.0)
+        self._fk = self.rho * (1.0 + e.ca) * inertia_volume
+        normal_jac = self._jac - np.einsum("nk,nl,nld->nkd", self._t, self._t, self._jac)
+        self._added_mass = np.einsum("n,nkd,nke->de", self.rho * e.ca * inertia_volume,
+                                     normal_jac, normal_jac)
+        self.wave = wave
+        self._wave = None if wave is None else AiryPoints(
+            wave, np.concatenate([e.centre, e.end_centre]), water_depth, g, ramp)
+        self._b_eq: np.ndarray | None = None
+
+    @classmethod
+    def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None, *,
+                  wave: Wave | None = None, ramp: float = 0.0) -> MemberMorison:
+        """The members of ``[body.hull]`` (``[[body.hull.members]]`` with their Morison
+        coefficients), ``[morison] element_length`` [m], ``[environment]`` ρ, g, depth;
+        ``dofs`` default the case's ``default_dofs``."""
+        try:
+            env, body = case["environment"], case["body"]
+            members = body["hull"]["members"]
+        except KeyError as exc:
+            raise InputError(f"case has no Morison member entry {exc}") from None
+        length = case.get("morison", {}).get("element_length", DEFAULT_STRIP_LENGTH)
+        return cls(member_elements(members, float(length)), env["rho"],
+                   dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS),
+                   reference_point=body.get("reference_point", (0.0, 0.0, 0.0)), wave=wave,
+                   water_depth=env.get("water_depth", math.inf), g=env["g"], ramp=ramp)
+
+    # ------------------------------------------------------------------ evaluation
+    def _check(self, n_dof: int) -> None:
+        if n_dof != len(self.dofs):
+            raise InputError(f"Morison members are set up for {len(self.dofs)} DOFs "
+                             f"({', '.join(self.dofs)}), got {n_dof}")
+
+    def _relative(self, t: float, zdot: np.ndarray):
+        """Relative velocity at elements and end discs (..., n, 3), (..., m, 3), and the wave
+        acceleration at the elements (n, 3) or None."""
+        u = -np.einsum("nkd,...d->...nk", self._jac, zdot)
+        u_end = -np.einsum("nkd,...d->...nk", self._jac_end, zdot)
+        acc = None
+        if self._wave is not None:
+            vel, a = self._wave.velocity_acceleration(t)
+            n = self._jac.shape[0]
+            u, u_end, acc = u + vel[:n], u_end + vel[n:], a[:n]
+        return u, u_end, acc
+
+    def generalised_force(self, t: float, zdot: np.ndarray) -> np.ndarray:
+        """Drag and wave inertia ``Σ Jᵀ dF`` [N, N m] for DOF rates ``zdot`` (..., n_dof)
+        [m/s, rad/s] at one time ``t`` [s] (no body-acceleration part)."""
+        zdot = np.asarray(zdot, dtype=float)
+        self._check(zdot.shape[-1])
+        u, u_end, acc = self._relative(t, zdot)
+        un = u - np.sum(u * self._t, axis=-1, keepdims=True) * self._t
+        f = (self.coef * np.linalg.norm(un, axis=-1))[..., None] * un
+        if acc is not None and np.any(self._fk):
+            an = acc - np.sum(acc * self._t, axis=-1, keepdims=True) * self._t
+            f = f + self._fk[:, None] * an
+        q = np.einsum("nkd,...nk->...d", self._jac, f)
+        if self.coef_end.size:
+            w = np.sum(u_end * self.elements.end_axis, axis=-1)
+            f_end = (self.coef_end * np.abs(w) * w)[..., None] * self.elements.end_axis
+            q = q + np.einsum("nkd,...nk->...d", self._jac_end, f_end)
+        return q
+
+    def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return self.generalised_force(t, zdot)
+
+    def force(self, hist: xr.Dataset) -> np.ndarray:
+        """Total Morison force on a history (n_time, n_dof) [N, N m], with ``−A_m z̈``."""
+        dofs = tuple(str(d) for d in hist["dof"].values)
+        if dofs != self.dofs:
+            raise InputError(f"Morison member DOFs {list(self.dofs)} differ from the "
+                             f"history's {list(dofs)}")
+        times = np.asarray(hist["time"].values, dtype=float)
+        zdot = kinematic(hist, "zdot")
+        out = np.array([self.generalised_force(t, v) for t, v in zip(times, zdot)])
+        if np.any(self._added_mass):
+            out -= kinematic(hist, "zddot") @ self._added_mass.T
+        return out
+
+    # ------------------------------------------------------------------ linearisation
+    def added_mass(self) -> np.ndarray:
+        """``A_m`` (n_dof, n_dof) [kg, kg m, kg m²]: Morison added mass of the members outside
+        the potential-flow model."""
+        return self._added_mass.copy()
+
+    def linearise_at(self, amplitude: Sequence[float] | np.ndarray) -> MemberMorison:
+        """Damping energy-equivalent to the drag of a harmonic motion in still water with DOF
+        velocity amplitudes ``amplitude`` (n_dof,) [m/s, rad/s], in phase (Borgman): per
+        element ``(8/3π) coef |(1 − t tᵀ) J a| Jᵀ (1 − t tᵀ) J``, per disc
+        ``(8/3π) coef |n·J a| Jᵀ n nᵀ J``."""
+        amp = np.asarray(amplitude, dtype=float).reshape(-1)
+        self._check(amp.size)
+        if not np.all(np.isfinite(amp)):
+            raise InputError("Morison: velocity amplitude must be finite")
+        normal_jac = self._jac - np.einsum("nk,nl,nld->nkd", self._t, self._t, self._jac)
+        speed = np.linalg.norm(normal_jac @ amp, axis=-1)
+        b = np.einsum("n,nkd,nke->de", _HARMONIC_FACTOR * self.coef * speed, normal_jac,
+                      normal_jac)
+        axial = np.einsum("nk,nkd->nd", self.elements.end_axis, self._jac_end)
+        b += np.einsum("n,nd,ne->de", _HARMONIC_FACTOR * self.coef_end * np.abs(axial @ amp),
+                       axial, axial)
+        self._b_eq = b
+        return self
+
+    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._check(n_dof)
+        zero = np.zeros((n_dof, n_dof))
+        b = self._b_eq if self._b_eq is not None else zero.copy()
+        return self._added_mass.copy(), b.copy(), zero
+
+    def describe(self) -> str:
+        e = self.elements
+        waves = "" if self.wave is None else f", wave kinematics {type(self.wave).__name__}"
+        return (f"member_morison({len(set(e.member))} members, {e.length.size} elements, "
+                f"{e.end_cd.size} axial end discs, Morison inertia on "
+                f"{len(set(np.array(e.member)[e.inertia]))} members, DOFs "
+                f"{','.join(self.dofs)}{waves})")
