@@ -17,11 +17,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hybridwsi.bodies import RigidAssembly
+from hybridwsi.bodies import RigidAssembly, member_elements
 from hybridwsi.cases import body_from_case, load_case
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
-from hybridwsi.forces import MemberMorison, MooringLines, MooringSystem, member_elements
+from hybridwsi.forces import MemberMorison, MooringLines, MooringSystem
+from hybridwsi.hydro.strip import slender_coefficients
 from hybridwsi.waves import Regular, dispersion_k
 
 CASE = load_case("oc4_semi")
@@ -139,6 +140,26 @@ def test_slender_added_mass_and_wave_inertia():
         f = comp.generalised_force(t, np.zeros(6))
         dwdt = -1.0 * omega**2 * math.exp(-17.0 * k) * math.cos(omega * t - k * 5.0)
         assert f[2] == pytest.approx(RHO * 2.0 * vol * dwdt, rel=1e-9)
+
+
+def test_strip_theory_coefficients_are_the_time_domain_inertia():
+    """The frequency-domain slender-member excitation Re[F̂ a e^{-iωt}] equals the time-domain
+    Morison wave inertia of the same wave (30° heading, finite depth), and A_m the added mass."""
+    comp = MemberMorison.from_case(CASE)
+    e = comp.elements
+    wave = Regular(period=8.0, height=2.0, phase=0.4, direction=math.radians(30.0))
+    no_drag = MemberMorison(e, RHO, RIGID_DOFS, wave=wave, water_depth=200.0, g=9.80665)
+    no_drag.coef[:] = 0.0
+    no_drag.coef_end[:] = 0.0
+    added, exc = slender_coefficients(e, np.array([wave.omega]), np.array([wave.direction]),
+                                      rho=RHO, g=9.80665, water_depth=200.0, dofs=RIGID_DOFS)
+    assert np.allclose(added, comp.added_mass(), rtol=1e-12, atol=1e-6)
+    amp = 1.0 * np.exp(-1j * 0.4)
+    for t in (0.0, 2.1, 5.5):
+        expect = np.real(exc[0, 0] * amp * np.exp(-1j * wave.omega * t))
+        got = no_drag.generalised_force(t, np.zeros(6))
+        assert np.allclose(got, expect, rtol=1e-9, atol=1e-9 * np.abs(expect).max())
+    assert np.abs(exc[0, 0, [1, 3, 5]]).min() > 0  # oblique: sway, roll, yaw excited
 
 
 def test_force_on_a_history_includes_the_added_mass():

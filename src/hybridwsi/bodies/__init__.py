@@ -19,11 +19,12 @@ the diagnostic. Implementations:
 from hybridwsi.bodies.assembly import MassItem, RigidAssembly
 from hybridwsi.bodies.axisymmetric import AxisymmetricBody
 from hybridwsi.bodies.base import Body, WaterplaneMoments, body_from_dict
-from hybridwsi.bodies.columns import ColumnsBody, Member
+from hybridwsi.bodies.columns import ColumnsBody
+from hybridwsi.bodies.members import Member, MemberElements, member_elements, point_jacobians
 from hybridwsi.bodies.mesh import MeshBody
 from hybridwsi.bodies.sphere import FloatingSphere, cap_volume
 from hybridwsi.dofs import RIGID_DOFS, check_dofs
 
 __all__ = ["RIGID_DOFS", "AxisymmetricBody", "Body", "ColumnsBody", "FloatingSphere", "MassItem",
-           "Member", "MeshBody", "RigidAssembly", "WaterplaneMoments", "body_from_dict",
-           "cap_volume", "check_dofs"]
+           "Member", "MemberElements", "MeshBody", "RigidAssembly", "WaterplaneMoments",
+           "body_from_dict", "cap_volume", "check_dofs", "member_elements", "point_jacobians"]

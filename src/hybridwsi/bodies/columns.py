@@ -45,86 +45,9 @@ import numpy as np
 from hybridwsi.bodies.axisymmetric import _check_profile, _clip, _volume
 from hybridwsi.bodies.base import (Body, WaterplaneMoments, as_tuple_matrix, inertia_matrix,
                                    positive, vector3)
+from hybridwsi.bodies.members import _GEOM_TOL, Member
 from hybridwsi.errors import InputError
 
-#: Morison coefficients a member entry may carry; the body ignores them (forces/morison.py)
-COEFFICIENT_KEYS = ("cd", "ca", "axial_cd", "axial_ca")
-#: tolerance [m] for "same axis", "touching ends" and the symmetry checks
-_GEOM_TOL = 1e-6
-
-
-@dataclass(frozen=True)
-class Member:
-    """A straight circular cylinder between two end points.
-
-    Parameters
-    ----------
-    name : str
-        Label (e.g. ``"pontoon_lower_1"``).
-    ends : ((x, y, z), (x, y, z))
-        End points of the axis, global frame at rest [m].
-    diameter : float
-        Outer diameter [m].
-    potential : bool
-        True: in the potential-flow (panel) model, must be vertical; False: slender member
-        (strip theory only).
-    """
-
-    name: str
-    ends: tuple[tuple[float, float, float], tuple[float, float, float]]
-    diameter: float
-    potential: bool = False
-
-    def __post_init__(self) -> None:
-        try:
-            a, b = self.ends
-        except (TypeError, ValueError):
-            raise InputError(f"member {self.name!r}: ends must be two points [m]") from None
-        a, b = vector3(f"member {self.name!r} end 1", a), vector3(f"member {self.name!r} end 2", b)
-        if math.dist(a, b) <= _GEOM_TOL:
-            raise InputError(f"member {self.name!r} has coincident ends")
-        object.__setattr__(self, "name", str(self.name))
-        object.__setattr__(self, "ends", (a, b))
-        object.__setattr__(self, "diameter", positive(f"diameter of {self.name!r}", self.diameter))
-        if not isinstance(self.potential, (bool, np.bool_)):
-            raise InputError(f"member {self.name!r}: potential must be true or false")
-        object.__setattr__(self, "potential", bool(self.potential))
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Member:
-        """A member from a case entry (Morison coefficient keys are dropped)."""
-        if not isinstance(data, dict):
-            raise InputError(f"a member must be a table, got {data!r}")
-        geometry = {k: v for k, v in data.items() if k not in COEFFICIENT_KEYS}
-        try:
-            return cls(**geometry)
-        except TypeError as exc:
-            raise InputError(f"cannot build a member from {data}: {exc} (keys: name, ends, "
-                             f"diameter, potential, and Morison {list(COEFFICIENT_KEYS)})") from None
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "ends": [list(p) for p in self.ends],
-                "diameter": self.diameter, "potential": self.potential}
-
-    @property
-    def radius(self) -> float:
-        return 0.5 * self.diameter
-
-    @property
-    def vertical(self) -> bool:
-        (xa, ya, _), (xb, yb, _) = self.ends
-        return math.hypot(xb - xa, yb - ya) <= _GEOM_TOL
-
-    def submerged_axis(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The axis segment below z = 0 (two points [m]), or None when dry."""
-        a, b = (np.asarray(p, dtype=float) for p in self.ends)
-        if a[2] >= 0.0 and b[2] >= 0.0:
-            return None
-        if a[2] > b[2]:
-            a, b = b, a
-        if b[2] > 0.0:  # pierces the free surface: cut at z = 0
-            b = a + (b - a) * (-a[2]) / (b[2] - a[2])
-        return a, b
 
 
 @dataclass(frozen=True)

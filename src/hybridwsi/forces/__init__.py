@@ -24,8 +24,8 @@ from hybridwsi.forces.linear import (
     parse_known,
 )
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
-from hybridwsi.forces.morison import (MemberElements, MemberMorison, MorisonDrag, Strips,
-                                     additional_damping, member_elements, profile_strips)
+from hybridwsi.forces.morison import (MemberMorison, MorisonDrag, Strips, additional_damping,
+                                     profile_strips)
 from hybridwsi.forces.radiation import RadiationMemory
 from hybridwsi.forces.rotor import ParkedRotor, RotorThrust, rotor_from_case
 
@@ -36,5 +36,5 @@ __all__ = [
     "PrescribedForce",
     "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
-    "MemberElements", "MemberMorison", "member_elements",
+    "MemberMorison",
 ]

@@ -55,10 +55,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi.bodies.members import MemberElements, point_jacobians
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.linear import LinearDamping
+from hybridwsi.hydro.strip import case_elements
 from hybridwsi.waves import AiryKinematics, AiryPoints, Wave
 
 #: default strip length [m] (OC3: 120 strips along the 120 m draft; pure surge is exact for
@@ -406,120 +408,6 @@ def additional_damping(case: Mapping[str, Any], dofs: Sequence[str] | str | None
 # ============================================================================================
 # Morison's equation on a frame of cylindrical members (semi-submersibles)
 # ============================================================================================
-@dataclass(frozen=True)
-class MemberElements:
-    """Strip elements and axial end discs of the submerged parts of cylindrical members.
-
-    Attributes
-    ----------
-    centre, tangent : ndarray, shape (n, 3)
-        Element centres [m] (global frame at rest) and unit axis directions.
-    length, diameter, cd, ca : ndarray, shape (n,)
-        Element length [m], diameter [m], transverse drag and added-mass coefficients [-].
-    inertia : ndarray of bool, shape (n,)
-        Morison inertia (added mass and wave inertia) on this element: the members outside
-        the potential-flow model (``potential = false``).
-    end_centre, end_axis : ndarray, shape (m, 3)
-        Centres [m] and unit normals of the end discs with an axial drag coefficient.
-    end_area, end_cd : ndarray, shape (m,)
-        Disc areas π D²/4 [m²] and axial drag coefficients [-].
-    member : tuple of str
-        Member name of each element.
-    """
-
-    centre: np.ndarray
-    tangent: np.ndarray
-    length: np.ndarray
-    diameter: np.ndarray
-    cd: np.ndarray
-    ca: np.ndarray
-    inertia: np.ndarray
-    end_centre: np.ndarray
-    end_axis: np.ndarray
-    end_area: np.ndarray
-    end_cd: np.ndarray
-    member: tuple[str, ...]
-
-    @property
-    def volume(self) -> np.ndarray:
-        """Element volumes π D²/4 l [m³]."""
-        return 0.25 * math.pi * self.diameter**2 * self.length
-
-
-def _coefficient(data: Mapping[str, Any], key: str, count: int) -> np.ndarray:
-    """A member's Morison coefficient(s) ``key`` (default 0) as ``count`` finite values >= 0."""
-    raw = data.get(key, 0.0)
-    try:
-        value = np.asarray(raw, dtype=float)
-    except (TypeError, ValueError):
-        value = np.array([np.nan])
-    if value.ndim == 0:
-        value = np.full(count, float(value))
-    if value.shape != (count,) or not np.all(np.isfinite(value)) or np.any(value < 0):
-        raise InputError(f"member {data.get('name')!r}: {key} must be {count} finite value(s) "
-                         f">= 0, got {raw!r}")
-    return value
-
-
-def member_elements(members: Sequence[Mapping[str, Any]],
-                    element_length: float = DEFAULT_STRIP_LENGTH) -> MemberElements:
-    """Cut the submerged part of each member into equal elements of length <= ``element_length``.
-
-    ``members``: case entries (``name``, ``ends``, ``diameter``, ``potential``; Morison ``cd``,
-    ``ca`` transverse and ``axial_cd`` = [end 1, end 2], all default 0). Dry members and dry
-    ends give nothing; a member cut by the free surface keeps its wet part.
-    """
-    from hybridwsi.bodies import Member
-
-    if not (math.isfinite(element_length) and element_length > 0):
-        raise InputError(f"Morison: element_length must be > 0 [m], got {element_length}")
-    rows, ends = [], []
-    for data in members:
-        m = Member.from_dict(dict(data))
-        cd, ca = _coefficient(data, "cd", 1)[0], _coefficient(data, "ca", 1)[0]
-        axial = _coefficient(data, "axial_cd", 2)
-        seg = m.submerged_axis()
-        if seg is None:
-            continue
-        a, b = seg
-        span = float(np.linalg.norm(b - a))
-        n = max(1, math.ceil(span / element_length - 1e-9))
-        t = (b - a) / span
-        for k in range(n):
-            rows.append(((a + (k + 0.5) / n * (b - a)), t, span / n, m.diameter, cd, ca,
-                         not m.potential, m.name))
-        axis = (np.asarray(m.ends[1]) - np.asarray(m.ends[0])) / math.dist(*m.ends)
-        for k, end in enumerate(m.ends):
-            if axial[k] > 0 and end[2] < 0:
-                ends.append((np.asarray(end, float), axis, 0.25 * math.pi * m.diameter**2,
-                             axial[k]))
-    if not rows:
-        raise InputError("Morison: no member is below the still-water level")
-    col = list(zip(*rows))
-    ecol = list(zip(*ends)) if ends else [np.zeros((0, 3)), np.zeros((0, 3)), (), ()]
-    return MemberElements(
-        centre=np.array(col[0]), tangent=np.array(col[1]), length=np.array(col[2]),
-        diameter=np.array(col[3]), cd=np.array(col[4]), ca=np.array(col[5]),
-        inertia=np.array(col[6], dtype=bool), member=tuple(col[7]),
-        end_centre=np.array(ecol[0]).reshape(-1, 3), end_axis=np.array(ecol[1]).reshape(-1, 3),
-        end_area=np.array(ecol[2], dtype=float), end_cd=np.array(ecol[3], dtype=float))
-
-
-def point_jacobians(points: np.ndarray, reference_point: Sequence[float] = (0.0, 0.0, 0.0)
-                    ) -> np.ndarray:
-    """(n, 3, 6): velocity of each point per unit DOF rate, ``v = v_O + ω × r`` (small angles),
-    ``r`` from the reference point O; its transpose maps a point force to forces and moments
-    about O."""
-    r = np.asarray(points, dtype=float) - np.asarray(reference_point, dtype=float)
-    jac = np.zeros((r.shape[0], 3, 6))
-    jac[:, 0, 0] = jac[:, 1, 1] = jac[:, 2, 2] = 1.0
-    # ω × r = -r × ω: rows of -[r×]
-    jac[:, 0, 4], jac[:, 0, 5] = r[:, 2], -r[:, 1]
-    jac[:, 1, 3], jac[:, 1, 5] = -r[:, 2], r[:, 0]
-    jac[:, 2, 3], jac[:, 2, 4] = r[:, 1], -r[:, 0]
-    return jac
-
-
 class MemberMorison(KnownComponent):
     """Morison's equation on every member of a frame, in 6 DOFs, on the relative velocity.
 
@@ -553,6 +441,10 @@ class MemberMorison(KnownComponent):
         Linear Airy kinematics of this wave (off: still water).
     water_depth, g, ramp : float
         Depth [m], gravity [m/s²] and half-cosine ramp [s] of the wave kinematics.
+    inertia : bool
+        Include the slender members' inertia (added mass, wave inertia). False when the
+        coefficients already hold it (:func:`hybridwsi.hydro.strip.with_slender_members`):
+        then this component is the members' drag only.
     """
 
     name = "member_morison"
@@ -560,9 +452,11 @@ class MemberMorison(KnownComponent):
     def __init__(self, elements: MemberElements, rho: float,
                  dofs: Sequence[str] | str = RIGID_DOFS, *,
                  reference_point: Sequence[float] = (0.0, 0.0, 0.0), wave: Wave | None = None,
-                 water_depth: float = math.inf, g: float = 9.81, ramp: float = 0.0) -> None:
+                 water_depth: float = math.inf, g: float = 9.81, ramp: float = 0.0,
+                 inertia: bool = True) -> None:
         if not (math.isfinite(rho) and rho > 0):
             raise InputError(f"Morison: rho must be > 0, got {rho}")
+        self.inertia = bool(inertia)
         self.elements, self.rho = elements, float(rho)
         self.dofs = check_dofs(dofs)
         idx = index(self.dofs)
@@ -573,7 +467,7 @@ class MemberMorison(KnownComponent):
         #: ½ ρ Cd D l per element and ½ ρ Cd_ax A per end disc [kg/m]
         self.coef = 0.5 * self.rho * e.cd * e.diameter * e.length
         self.coef_end = 0.5 * self.rho * e.end_cd * e.end_area
-        inertia_volume = np.where(e.inertia, e.volume, 0.0)
+        inertia_volume = np.where(e.inertia & self.inertia, e.volume, 0.0)
         self._fk = self.rho * (1.0 + e.ca) * inertia_volume
         normal_jac = self._jac - np.einsum("nk,nl,nld->nkd", self._t, self._t, self._jac)
         self._added_mass = np.einsum("n,nkd,nke->de", self.rho * e.ca * inertia_volume,
@@ -585,20 +479,21 @@ class MemberMorison(KnownComponent):
 
     @classmethod
     def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None, *,
-                  wave: Wave | None = None, ramp: float = 0.0) -> MemberMorison:
+                  wave: Wave | None = None, ramp: float = 0.0, inertia: bool = True
+                  ) -> MemberMorison:
         """The members of ``[body.hull]`` (``[[body.hull.members]]`` with their Morison
-        coefficients), ``[morison] element_length`` [m], ``[environment]`` ρ, g, depth;
-        ``dofs`` default the case's ``default_dofs``."""
+        coefficients; :func:`hybridwsi.hydro.strip.case_elements`), ``[environment]`` ρ, g,
+        depth; ``dofs`` default the case's ``default_dofs``; ``inertia`` as in the class."""
         try:
-            env, body = case["environment"], case["body"]
-            members = body["hull"]["members"]
-        except KeyError as exc:
-            raise InputError(f"case has no Morison member entry {exc}") from None
-        length = case.get("morison", {}).get("element_length", DEFAULT_STRIP_LENGTH)
-        return cls(member_elements(members, float(length)), env["rho"],
+            env = case["environment"]
+            ref = case["body"].get("reference_point", (0.0, 0.0, 0.0))
+            rho, g = env["rho"], env["g"]
+        except (KeyError, AttributeError) as exc:
+            raise InputError(f"case has no Morison entry {exc}") from None
+        return cls(case_elements(case), rho,
                    dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS),
-                   reference_point=body.get("reference_point", (0.0, 0.0, 0.0)), wave=wave,
-                   water_depth=env.get("water_depth", math.inf), g=env["g"], ramp=ramp)
+                   reference_point=ref, wave=wave, water_depth=env.get("water_depth", math.inf),
+                   g=g, ramp=ramp, inertia=inertia)
 
     # ------------------------------------------------------------------ evaluation
     def _check(self, n_dof: int) -> None:
@@ -686,7 +581,7 @@ class MemberMorison(KnownComponent):
     def describe(self) -> str:
         e = self.elements
         waves = "" if self.wave is None else f", wave kinematics {type(self.wave).__name__}"
+        inertia = len(set(np.array(e.member)[e.inertia])) if self.inertia else 0
         return (f"member_morison({len(set(e.member))} members, {e.length.size} elements, "
-                f"{e.end_cd.size} axial end discs, Morison inertia on "
-                f"{len(set(np.array(e.member)[e.inertia]))} members, DOFs "
-                f"{','.join(self.dofs)}{waves})")
+                f"{e.end_cd.size} axial end discs, Morison inertia on {inertia} members, "
+                f"DOFs {','.join(self.dofs)}{waves})")

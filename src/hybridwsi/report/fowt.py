@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -107,17 +107,24 @@ def modal_summary(coeffs: xr.Dataset, stiffness: np.ndarray, dofs: Sequence[str]
 
 
 def decay_histories(coeffs: xr.Dataset, forces: Sequence[KnownComponent], *,
-                    dofs: Sequence[str] = DOFS, quick: bool = False, dt: float = 0.25
-                    ) -> dict[str, xr.Dataset]:
-    """Free decays released from :data:`DECAY_OFFSET` in each DOF (the others at rest).
+                    dofs: Sequence[str] = DOFS, quick: bool = False, dt: float = 0.25,
+                    offsets: Mapping[str, float] | None = None,
+                    durations: Mapping[str, float] | None = None) -> dict[str, xr.Dataset]:
+    """Free decays released from ``offsets`` [m or rad] (default :data:`DECAY_OFFSET`) in each
+    DOF of ``offsets`` (the others at rest), all ``dofs`` free.
 
-    Durations: 10 surge periods (1240 s; 6 when ``quick``), 10 heave/pitch periods (300 s).
+    Durations [s] per released DOF from ``durations``; default 10 surge periods (1240 s; 6
+    when ``quick``), 10 heave/pitch periods (300 s).
     """
+    offsets = DECAY_OFFSET if offsets is None else offsets
     out = {}
-    for i, dof in enumerate(dofs):
+    for dof in offsets:
         z0 = np.zeros(len(dofs))
-        z0[i] = DECAY_OFFSET[dof]
-        duration = (750.0 if quick else 1250.0) if dof == "Surge" else 300.0
+        z0[list(dofs).index(dof)] = offsets[dof]
+        if durations is not None:
+            duration = float(durations[dof])
+        else:
+            duration = (750.0 if quick else 1250.0) if dof == "Surge" else 300.0
         out[dof] = simulate(coeffs, dofs=dofs, duration=duration, dt=dt, z0=z0,
                             forces=list(forces))
     return out
@@ -157,42 +164,46 @@ def frequency_response(coeffs: xr.Dataset, omega: float, force: np.ndarray,
 
 def rao_point(coeffs: xr.Dataset, forces: Sequence[KnownComponent], period: float, *,
               stiffness: np.ndarray, damping: np.ndarray, dofs: Sequence[str] = DOFS,
-              quick: bool = False) -> dict[str, Any]:
-    """One regular wave: time-domain steady-state amplitude per DOF against the frequency
-    domain, both per unit wave amplitude (m/m, rad/m).
+              quick: bool = False, direction: float = 0.0) -> dict[str, Any]:
+    """One regular wave travelling towards ``direction`` [rad]: time-domain steady-state
+    amplitude per DOF against the frequency domain, both per unit wave amplitude (m/m, rad/m).
 
     The run ramps the excitation over 300 s (so the slow surge mode is hardly excited) and
     fits the last whole wave periods; F̂_exc is fitted from the same run's ``F_exc`` so that
-    both sides see the identical excitation (BEM F_e interpolated at ω).
+    both sides see the identical excitation (BEM F_e interpolated at ω). The relative error
+    is NaN for a DOF the wave does not move (frequency-domain amplitude exactly 0).
     """
     omega = 2.0 * math.pi / period
     amp = RAO_HEIGHT / 2.0
     dt = period / 40.0
     duration = 1500.0 if quick else 2500.0
     hist = simulate(coeffs, dofs=dofs, duration=duration, dt=dt,
-                    wave=Regular(period=period, height=RAO_HEIGHT), ramp=300.0,
-                    forces=list(forces))
+                    wave=Regular(period=period, height=RAO_HEIGHT, direction=direction),
+                    ramp=300.0, forces=list(forces))
     t = hist["time"].values
     n_per = int(math.floor(600.0 / period))
     sel = t >= t[-1] - n_per * period - 1e-9
     td = harmonic_amplitude(t[sel], hist["z"].values[sel], omega) / amp
     f_hat = harmonic_amplitude(t[sel], hist["F_exc"].values[sel], omega) / amp
     fd = frequency_response(coeffs, omega, f_hat, stiffness, damping, dofs)
-    return {"period": period, "omega": omega,
+    ref = np.where(np.abs(fd) > 0, np.abs(fd), np.nan)
+    return {"period": period, "omega": omega, "direction": direction,
             "time_domain": {d: float(abs(td[i])) for i, d in enumerate(dofs)},
             "frequency_domain": {d: float(abs(fd[i])) for i, d in enumerate(dofs)},
-            "relative_error": {d: float(abs(abs(td[i]) - abs(fd[i])) / abs(fd[i]))
+            "relative_error": {d: float(abs(abs(td[i]) - abs(fd[i])) / ref[i])
                                for i, d in enumerate(dofs)}}
 
 
 def rao_curve(coeffs: xr.Dataset, stiffness: np.ndarray, damping: np.ndarray,
-              omegas: np.ndarray, dofs: Sequence[str] = DOFS) -> np.ndarray:
-    """|X(ω)|/a on ``omegas`` (n_ω, n_dof) with F̂ = F_e(ω) interpolated like the time domain."""
+              omegas: np.ndarray, dofs: Sequence[str] = DOFS, direction: float = 0.0
+              ) -> np.ndarray:
+    """|X(ω)|/a on ``omegas`` (n_ω, n_dof) with F̂ = F_e(ω) interpolated like the time domain,
+    waves towards ``direction`` [rad]."""
     out = np.empty((omegas.size, len(dofs)))
     t = np.array([0.0])
     for k, w in enumerate(omegas):
         # F_exc(0) and F_exc(T/4) of a unit-amplitude wave give Re and -Im of F̂ (e^{iωt})
-        wave = Regular(period=2 * math.pi / w, height=2.0)
+        wave = Regular(period=2 * math.pi / w, height=2.0, direction=direction)
         f0 = excitation_force(wave, coeffs, t, list(dofs))[0]
         f1 = excitation_force(wave, coeffs, t + 0.5 * math.pi / w, list(dofs))[0]
         out[k] = np.abs(frequency_response(coeffs, w, f0 - 1j * f1, stiffness, damping, dofs))
