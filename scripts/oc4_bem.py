@@ -17,13 +17,13 @@ Run with ``nice -n 10`` and ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hy
 
 from __future__ import annotations
 
-import shutil
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+
+from bem_tables import convergence_table
 
 from hybridwsi.cases import bem_arguments, load_case
 from hybridwsi.cli import Parser, run_script
@@ -59,37 +59,21 @@ def wamit_comparison(ds: xr.Dataset) -> xr.Dataset:
 
 def convergence(panel_sizes: list[float], omegas: list[float], cache_dir: str | None) -> None:
     """Print A11, A33, A55, B33 at ``omegas`` and A(inf) per panel size (markdown table)."""
-    args = bem_arguments(load_case("oc4_semi"))
-    print("| panel size [m] | hull + lid panels | ω [rad/s] | A11 [kg] | A33 [kg] | "
-          "A55 [kg m²] | B33 [N s/m] | wall [s] |")
-    print("|---|---|---|---|---|---|---|---|")
-    for h in panel_sizes:
-        start = time.perf_counter()
-        ds = bem.compute(args["body"], omegas, water_depth=args["water_depth"], panel_size=h,
-                         low_kh=args["low_kh"], include_zero=False, cache_dir=cache_dir,
-                         progress=False, n_jobs=1)
-        wall = time.perf_counter() - start
-        panels = f"{ds.attrs['n_panels']} + {ds.attrs['n_lid_panels']}"
-        a, b = co.matrix_omega(ds, "added_mass"), co.matrix_omega(ds, "radiation_damping")
-        for k, w in enumerate(co.omega(ds)):
-            print(f"| {h:g} | {panels} | {w:g} | {a[k, 0, 0]:.5e} | {a[k, 2, 2]:.5e} | "
-                  f"{a[k, 4, 4]:.5e} | {b[k, 2, 2]:.5e} | {wall:.0f} |")
-        ainf = co.matrix(ds, "added_mass_inf")
-        print(f"| {h:g} | {panels} | ∞ | {ainf[0, 0]:.5e} | {ainf[2, 2]:.5e} | "
-              f"{ainf[4, 4]:.5e} | 0 | |")
-        sys.stdout.flush()
+    convergence_table(bem_arguments(load_case("oc4_semi")), panel_sizes, omegas,
+                      [("A11 [kg]", "A", 0, 0), ("A33 [kg]", "A", 2, 2),
+                       ("A55 [kg m²]", "A", 4, 4), ("B33 [N s/m]", "B", 2, 2)],
+                      cache_dir=cache_dir)
 
 
 def ship(cache_dir: str | None) -> xr.Dataset:
-    """Solve ``[bem]`` of the case (or read it from the cache) and copy it to the package."""
+    """Solve ``[bem]`` of the case (or read it from the cache) and write it to the package
+    (``to_netcdf`` writes atomically)."""
     start = time.perf_counter()
     ds = bem.compute(**bem_arguments(load_case("oc4_semi")), cache_dir=cache_dir, n_jobs=1,
                      chunk_size=4)
-    print(f"wall time {time.perf_counter() - start:.0f} s; input_hash {ds.attrs['input_hash']}")
-    tmp = SHIPPED.with_suffix(".tmp.nc")
-    to_netcdf(ds, tmp)
-    shutil.move(tmp, SHIPPED)
-    print(f"-> {SHIPPED} ({SHIPPED.stat().st_size / 1e6:.2f} MB)")
+    to_netcdf(ds, SHIPPED)
+    print(f"wall time {time.perf_counter() - start:.0f} s; input_hash "
+          f"{ds.attrs['input_hash']} -> {SHIPPED} ({SHIPPED.stat().st_size / 1e6:.2f} MB)")
     return ds
 
 
@@ -154,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     conv = sub.add_parser("convergence", help="panel-convergence table")
     conv.add_argument("--panel-sizes", type=float, nargs="+", default=[2.0, 1.5, 1.0])
-    conv.add_argument("--omega", type=float, nargs="+", default=[0.1, 0.5, 0.7904, 1.26],
+    conv.add_argument("--omega", type=float, nargs="+", default=[0.1, 0.5, 0.79, 1.26],
                       help="frequencies [rad/s]: low, and WAMIT's 12.57 s, 7.95 s, 4.99 s")
     shp = sub.add_parser("ship", help="solve [bem], copy to the package, plot")
     sub.add_parser("plot", help="only the figure of the shipped file")
