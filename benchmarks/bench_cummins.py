@@ -51,7 +51,7 @@ def main() -> None:
     args = p.parse_args()
 
     from hybridwsi import cummins
-    from hybridwsi.cummins.solvers import run_linear, solve_convolution
+    from hybridwsi.cummins.solvers import solve_convolution, solve_linear
     from hybridwsi.hydro.statespace import fit_radiation_ss
     from hybridwsi.waves import Regular
 
@@ -81,10 +81,9 @@ def main() -> None:
     u = h_ss.F_exc.values + h_ss.F_ext.values
     z0, v0 = np.array([0.01]), np.array([0.0])
     # minimum over repeats: the least disturbed measurement on a shared machine
-    t_lin = min(timeit.repeat(lambda: run_linear(sys_ss, u[:, :, None], z0[:, None],
-                                                 v0[:, None], args.dt),
+    t_lin = min(timeit.repeat(lambda: solve_linear(sys_ss, u, z0, v0, args.dt),
                               number=1, repeat=7))
-    t_conv = min(timeit.repeat(lambda: solve_convolution(sys_cv, u, z0, v0, args.dt, False),
+    t_conv = min(timeit.repeat(lambda: solve_convolution(sys_cv, u, z0, v0, args.dt),
                                number=1, repeat=2))
     print(f"integration only: convolution {t_conv:.3f} s, state space {t_lin * 1e3:.2f} ms "
           f"-> speed-up {t_conv / t_lin:.0f}x (target >= 100x)")

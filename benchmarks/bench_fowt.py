@@ -27,7 +27,8 @@ from hybridwsi.cases import load_case
 from hybridwsi.cummins import build_system, simulate, solvers
 from hybridwsi.forces import MooringForce, MorisonDrag
 from hybridwsi.forces._compiled import HAVE_NUMBA
-from hybridwsi.report.fowt import DOFS, linear_forces, oc3_coefficients
+from hybridwsi.casemodel import linear_components
+from hybridwsi.report.fowt import DOFS, oc3_coefficients
 from hybridwsi.waves import JONSWAP
 
 
@@ -52,7 +53,7 @@ def main(argv: list[str] | None = None) -> None:
     coeffs = oc3_coefficients(case)
     wave = JONSWAP(hs=6.0, tp=10.0, gamma=3.3, seed=1, n_components=100)
     mooring = MooringForce.from_case(case, list(DOFS))
-    linear = linear_forces(case, mooring.table.stiffness())  # [−K z, B_add]
+    linear = linear_components(case, DOFS, stiffness=mooring.table.stiffness())  # [−K z, B_add]
     drag = MorisonDrag.from_case(case, list(DOFS), wave=wave, ramp=60.0)
     t0 = time.perf_counter()
     ss = build_system(coeffs, dofs=DOFS, dt=args.dt).ss

@@ -14,7 +14,7 @@ metadata, Numba dispatch) cancels on both sides alike.
   (one network call per step) and ``corrected`` (two), compiled loop
   (:mod:`hybridwsi.surrogate.fast`, Numba) and the NumPy stepper, 1 case and 32 cases.
 - core lines: the solvers alone, without histories: the Cummins modal solver
-  (``cummins.solvers.run_linear``) against the hybrid's compiled loop (``fast.run_explicit``).
+  (``cummins.solvers.solve_linear``) against the hybrid's compiled loop (``fast.run_explicit``).
 - for reference, the baseline this benchmark used before: ``simulate`` with the JONSWAP
   excitation *synthesised inside the run* (a harmonic sum per sample, ~80 % of that
   "step"), which the hybrid never pays (its cases hold F_exc): unfair to the Cummins side.
@@ -133,10 +133,10 @@ def main() -> None:
 
     base1, base32 = marginal(cum1, 1), marginal(cum32, N_CASES)
     base_wave = marginal(cum_wave, 1)
-    u = {n: np.stack([h["F_exc"].values[:n + 1] for h in cases], axis=-1)
-         for n in (N_LONG, N_SHORT)}  # (nt, 1, n_case)
-    zero = np.zeros((1, N_CASES))
-    core_cum = marginal(lambda n: solvers.run_linear(sysm, u[n], zero, zero, DT), N_CASES)
+    u = {n: np.stack([h["F_exc"].values[:n + 1] for h in cases])
+         for n in (N_LONG, N_SHORT)}  # (n_case, nt, 1)
+    zero = np.zeros((N_CASES, 1))
+    core_cum = marginal(lambda n: solvers.solve_linear(sysm, u[n], zero, zero, DT), N_CASES)
 
     # --- hybrid
     def hyb(batch, mode="lagged", compiled=None):
@@ -182,7 +182,7 @@ def main() -> None:
     print(f"Cummins state-space, F_exc series, 32 cases : {base32 * 1e6:8.3f} us (baseline 1x)")
     for label, t, base in rows:
         print(f"{label}: {t * 1e6:8.3f} us   ratio {t / base:7.2f}x")
-    print(f"core: Cummins modal solver (run_linear), 32 cases: {core_cum * 1e6:8.3f} us")
+    print(f"core: Cummins modal solver (solve_linear), 32 cases: {core_cum * 1e6:8.3f} us")
     if core_hyb is not None:
         print(f"core: hybrid compiled loop (run_explicit), 32   : {core_hyb * 1e6:8.3f} us   "
               f"ratio {core_hyb / core_cum:7.2f}x")

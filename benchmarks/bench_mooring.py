@@ -15,6 +15,18 @@ its three catenary lines) per state:
 Best of ``--repeat`` runs each, so a loaded machine slows both sides alike. Also prints the
 largest interpolation error on the benchmark states, relative to each DOF's force scale.
 Run: ``python benchmarks/bench_mooring.py`` (needs ``hybridwsi[mooring]``).
+
+``--moordyn``: the cost of the MoorDyn-coupled time loop instead. OC3-Hywind, 6 DOFs, a
+JONSWAP sea (Hs 5 m, Tp 11 s, 100 components), the additional linear damping and the mooring,
+solver Δt 0.1 s, ``cummins.simulate`` with the radiation state space fitted once (outside the
+timing): the candidate couples :class:`~hybridwsi.forces.MoorDynForce` (the shipped input,
+MoorDyn sub-stepping at its dtM; its static initialisation at the start of every run is
+inside the timing), the baseline is the same run with the tabulated quasi-static mooring
+(:class:`~hybridwsi.forces.MooringForce`, compiled RK4 loop). Alternating baseline/candidate
+``--repeat`` times (≥ 5); a baseline sample repeats its run until it lasts ≥ 0.2 s. Prints the
+MoorDyn-coupled wall time per simulated hour against real time (3600 s) and the median ratio to
+the baseline with its spread. ``--duration`` [s] simulated per sample (default 600; 3600 for a
+literal hour).
 """
 
 from __future__ import annotations
@@ -39,12 +51,78 @@ def _best_per_call(fn, calls: int, repeat: int) -> float:
     return best
 
 
+def _timed(run, min_time: float = 0.2) -> tuple[float, object]:
+    """Wall time of one call of ``run``, repeated until the sample lasts ``min_time`` [s]."""
+    n, t0 = 0, time.perf_counter()
+    while True:
+        out = run()
+        n += 1
+        wall = time.perf_counter() - t0
+        if wall >= min_time:
+            return wall / n, out
+
+
+def moordyn_cost(duration: float, repeat: int) -> None:
+    """MoorDyn-coupled run against the tabulated-mooring baseline (module doc, ``--moordyn``)."""
+    from hybridwsi.cummins import build_system, simulate
+    from hybridwsi.forces import MoorDynForce, MooringForce, additional_damping
+    from hybridwsi.report.fowt import oc3_coefficients
+    from hybridwsi.waves import JONSWAP
+
+    dofs = ["Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw"]
+    dt = 0.1
+    case = load_case("oc3_hywind")
+    coeffs = oc3_coefficients(case)
+    wave = JONSWAP(hs=5.0, tp=11.0, gamma=3.3, seed=7, n_components=100)
+    damping = additional_damping(case, dofs)
+    table = MooringForce.from_case(case, dofs)
+    moordyn = MoorDynForce.from_case(case, dofs, dt=dt)
+    moordyn.stiffness()  # static solves cached once (simulate asks linear_coefficients)
+    kw = dict(dofs=dofs, duration=duration, dt=dt, wave=wave, ramp=60.0,
+              radiation_ss=build_system(coeffs, dofs=dofs, dt=dt).ss)
+    simulate(coeffs, forces=[table, damping], **dict(kw, duration=10 * dt))  # Numba warm-up
+    ratios, walls, base, cpu = [], [], [], []
+    for _ in range(repeat):
+        t_base, h_base = _timed(lambda: simulate(coeffs, forces=[table, damping], **kw))
+        t0, c0 = time.perf_counter(), time.process_time()
+        h_md = simulate(coeffs, forces=[moordyn, damping], **kw)
+        t_md = time.perf_counter() - t0
+        cpu.append(time.process_time() - c0)
+        ratios.append(t_md / t_base)
+        walls.append(t_md)
+        base.append(t_base)
+    hour = 3600.0 / duration * np.median(walls)
+    print(f"{duration:.0f} s simulated per sample, 6 DOF, dt {dt} s, {repeat} alternating samples; "
+          f"{moordyn.describe()}")
+    print(f"MoorDyn-coupled   : median {np.median(walls):7.2f} s wall (min {min(walls):.2f}, max "
+          f"{max(walls):.2f}) -> {hour:6.0f} s per simulated hour = {3600.0 / hour:5.1f}x "
+          f"faster than real time")
+    print(f"  its CPU time    : median {np.median(cpu):7.2f} s -> "
+          f"{3600.0 / duration * np.median(cpu):6.0f} s CPU per simulated hour (the wall time "
+          f"on a machine shared with other jobs is longer)")
+    print(f"tabulated baseline: median {np.median(base):7.3f} s wall (min {min(base):.3f}, max "
+          f"{max(base):.3f}) -> {3600.0 / duration * np.median(base):6.1f} s per hour")
+    print(f"ratio MoorDyn / table: median {np.median(ratios):.0f}x (min {min(ratios):.0f}, max "
+          f"{max(ratios):.0f})")
+    z_md, z_tab = h_md["z"].values, h_base["z"].values
+    print("std surge/heave/pitch MoorDyn: "
+          + ", ".join(f"{z_md[:, i].std():.4g}" for i in (0, 2, 4))
+          + "; table: " + ", ".join(f"{z_tab[:, i].std():.4g}" for i in (0, 2, 4)))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=2000, help="interpolant calls per run")
     parser.add_argument("--repeat", type=int, default=5, help="best of this many runs")
     parser.add_argument("--batch", type=int, default=32, help="states per batch call")
+    parser.add_argument("--moordyn", action="store_true",
+                        help="time the MoorDyn-coupled loop against the tabulated mooring")
+    parser.add_argument("--duration", type=float, default=600.0,
+                        help="--moordyn: simulated time per sample [s]")
     args = parser.parse_args()
+    if args.moordyn:
+        moordyn_cost(args.duration, max(args.repeat, 5))
+        return
 
     case = load_case("oc3_hywind")
     system = MooringSystem.from_case(case)

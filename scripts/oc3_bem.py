@@ -22,7 +22,8 @@ import xarray as xr
 
 from bem_tables import convergence_table
 
-from hybridwsi.cases import bem_arguments, load_case
+from hybridwsi.casemodel import bem_arguments
+from hybridwsi.cases import load_case
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import read_netcdf, to_netcdf
 from hybridwsi.hydro import bem

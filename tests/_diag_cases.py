@@ -7,6 +7,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import scipy.integrate
 
+from hybridwsi.forces import KnownComponent
+
 # the paper's sphere (docs/THEORY.md §6)
 M, A_INF, C_HS = 7.06, 3.50, 692.2
 
@@ -37,3 +39,26 @@ def forced_oscillator(
     assert sol.success, sol.message
     z, zd = sol.y
     return z, zd, (f_ext(t) - b * zd - c * z) / m
+
+
+class HeldSpring(KnownComponent):
+    """A spring −k z evaluated once per step, at its start, and held over the step (the lagged
+    coupling of a code stepped by the integrator, ``begin_step``); records its calls."""
+
+    name = "held_spring"
+
+    def __init__(self, k: float) -> None:
+        self.k, self.calls, self.held = k, [], np.zeros(1)
+
+    def begin_step(self, t, z, zdot, dt):
+        self.calls.append((t, dt))
+        self.held = -self.k * z
+
+    def ode_force(self, t, z, zdot, x):
+        return self.held.copy()
+
+    def force(self, hist):
+        return -self.k * hist["z"].values
+
+    def linear_coefficients(self, n):
+        return np.zeros((n, n)), np.zeros((n, n)), self.k * np.eye(n)

@@ -67,6 +67,18 @@ def test_dofs_wherever_dofs_matter(parsers):
     assert parsers["diagnose"].parse_args(["--dofs", "surge,Pitch"]).dofs == ("Surge", "Pitch")
 
 
+def test_case_mooring_and_eta_options_are_one_definition(parsers):
+    """--case NAME|FILE, --mooring and --eta mean one thing in every command that has them."""
+    for name in ("bem", "simulate", "sweep"):
+        action = parsers[name]._option_string_actions["--case"]
+        assert action.metavar == "NAME|FILE" and "case TOML file" in action.help, name
+    for name in ("simulate", "sweep"):
+        assert parsers[name]._option_string_actions["--mooring"].choices == o.MOORING_MODELS
+    for name in ("import", "diagnose", "hybrid", "simulate"):
+        assert parsers[name]._option_string_actions["--eta"].help.startswith(
+            "wave-elevation column"), name
+
+
 def test_quiet_everywhere(parsers):
     for name, p in parsers.items():
         assert "--quiet" in p._option_string_actions, name

@@ -23,7 +23,8 @@ from hybridwsi.cummins import build_system, simulate, solvers  # noqa: E402
 from hybridwsi.errors import InputError, SolverError  # noqa: E402
 from hybridwsi.forces import KnownComponent, LinearDamping, MooringForce, MorisonDrag  # noqa: E402
 from hybridwsi.forces.mooring import MooringTable  # noqa: E402
-from hybridwsi.report.fowt import linear_forces, oc3_coefficients  # noqa: E402
+from hybridwsi.casemodel import linear_components  # noqa: E402
+from hybridwsi.report.fowt import oc3_coefficients  # noqa: E402
 from hybridwsi.waves import JONSWAP  # noqa: E402
 
 #: the DOFs in a non-canonical order: nothing may assume Surge first or Pitch last
@@ -83,7 +84,8 @@ def test_oc3_sea_state_matches_numpy_loop(case, coeffs, mooring_table, monkeypat
     wave = JONSWAP(hs=6.0, tp=10.0, gamma=3.3, seed=3, n_components=60)
     mooring = MooringForce(mooring_table, DOFS3)
     drag = MorisonDrag.from_case(case, DOFS3, wave=wave, ramp=20.0)
-    stiffness, damping = linear_forces(case, 0.1 * mooring_table.stiffness(), DOFS3)
+    stiffness, damping = linear_components(case, DOFS3,
+                                           stiffness=0.1 * mooring_table.stiffness())
     kw = dict(dofs=DOFS3, duration=80.0, dt=0.1, wave=wave, ramp=20.0, z0=[0.01, 2.0, 0.3])
 
     fast, slow = _both(monkeypatch, lambda: simulate(

@@ -21,7 +21,8 @@ from hybridwsi.forces import MooringForce, MooringSystem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.report import fowt_diagnostic as fd
 from hybridwsi.report import fowt, fowt_hybrid as fh
-from hybridwsi.report.fowt import linear_forces, oc3_coefficients
+from hybridwsi.casemodel import linear_components
+from hybridwsi.report.fowt import oc3_coefficients
 
 DOFS = ["Surge", "Heave", "Pitch"]
 
@@ -32,7 +33,7 @@ def setup():
     coeffs = oc3_coefficients(case)
     cfg = fd.hybrid_settings(case, quick=True)
     k6 = MooringSystem.from_case(case).stiffness()
-    klin, damp = linear_forces(case, k6, DOFS)
+    klin, damp = linear_components(case, DOFS, stiffness=k6)
     moor = MooringForce.from_case(case, DOFS)
     ss = build_system(coeffs, dofs=DOFS, dt=cfg["dt"]).ss
     hist = fd.irregular_history(coeffs, case, moor, damp, cfg["train"][0], dofs=DOFS,
@@ -130,8 +131,9 @@ def test_recommended_partition_is_lag_safe(setup):
 
 
 def test_diagnostic_markdown_lists_every_partition(setup):
-    diag = fd.diagnostic([setup["hist"]], *linear_forces(setup["case"], MooringSystem.from_case(
-        setup["case"]).stiffness(), DOFS), setup["cfg"])
+    diag = fd.diagnostic([setup["hist"]], *linear_components(
+        setup["case"], DOFS, stiffness=MooringSystem.from_case(setup["case"]).stiffness()),
+        setup["cfg"])
     md = fd.diagnostic_markdown(diag)
     for name in fd.RESIDUAL:
         assert f"| {name} |" in md

@@ -32,7 +32,7 @@ import pytest
 import xarray as xr
 
 from hybridwsi.cli import main
-from hybridwsi.diagnostic import assess, reconstruct, regress
+from hybridwsi.diagnostic import CoupledStep, assess, reconstruct, regress
 from hybridwsi.diagnostic.partition import peak_omega, select_partition
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
@@ -192,34 +192,41 @@ def test_regression_returns_the_closed_form_matrices(case):
     json.dumps(res.to_dict())
 
 
+def _assess(hist, known):
+    """The stability of the residual of ``known`` (semi-implicit Euler at DT)."""
+    reg = regress(hist, known=known)
+    return assess(CoupledStep.from_components(M, known, reg, dt=DT,
+                                              scheme="semi_implicit_euler"))
+
+
 def test_assess_matches_closed_form_eigenvalues():
     hist = history()
     # hydrostatic + A∞ known: α = M + A is the whole inertia
     known = CASES["hydrostatic+added_mass_inf"][0]
-    rep = assess(regress(hist, known=known), M, known, dt=DT)
+    rep = _assess(hist, known)
     # (a) (M + A) ë + C e = 0: λ = ±i ω_n with ω_n² the roots of det(C − ω²(M + A)) = 0
     wn2 = np.sort(_quadratic_roots(C, M + A).real)
-    lam = rep["prescribed_force"].eigenvalues
-    assert rep["prescribed_force"].verdict == "neutral"
+    lam = rep.prescribed.eigenvalues
+    assert rep.prescribed.verdict == "neutral"
     np.testing.assert_allclose(np.sort(np.abs(lam.imag))[::2], np.sqrt(wn2), rtol=1e-8)
     # (b) the surrogate cancels the inertia; (c) added-mass ratio 1: unstable at every Δt
-    assert rep["surrogate"].verdict == "unstable"
-    assert rep["loosely_coupled"].conditions["added_mass_ratio"] == pytest.approx(1.0, rel=1e-8)
-    assert rep["loosely_coupled"].max_stable_dt == 0.0
+    assert rep.continuous.verdict == "unstable"
+    assert rep.loosely_coupled.conditions["added_mass_ratio"] == pytest.approx(1.0, rel=1e-8)
+    assert rep.loosely_coupled.max_stable_dt == 0.0
 
     # hydrostatic + excitation known: α_s = −A, β_s = −B
     known = CASES["hydrostatic+excitation"][0]
-    rep = assess(regress(hist, known=known), M, known, dt=DT)
+    rep = _assess(hist, known)
     # (b) (M + A) λ² + B λ + C = 0: each eigenvalue makes the matrix singular, all decay
-    lam = rep["surrogate"].eigenvalues
-    assert rep["surrogate"].verdict == "stable" and lam.size == 4 and np.all(lam.real < 0)
+    lam = rep.continuous.eigenvalues
+    assert rep.continuous.verdict == "stable" and lam.size == 4 and np.all(lam.real < 0)
     for li in lam:
         s = np.linalg.svd(li**2 * (M + A) + li * B + C, compute_uv=False)
         assert s[-1] < 1e-7 * s[0]
     # (c) added-mass ratio = spectral radius of M⁻¹A (> 1 here: lagged coupling fails)
     ratio = np.max(np.abs(_quadratic_roots(A, M)))
-    assert rep["loosely_coupled"].conditions["added_mass_ratio"] == pytest.approx(ratio, rel=1e-8)
-    assert ratio > 1 and rep["loosely_coupled"].verdict == "unstable"
+    assert rep.loosely_coupled.conditions["added_mass_ratio"] == pytest.approx(ratio, rel=1e-8)
+    assert ratio > 1 and rep.loosely_coupled.verdict == "unstable"
 
 
 def test_reconstruction_with_everything_known_reproduces_the_motion():
@@ -227,7 +234,7 @@ def test_reconstruction_with_everything_known_reproduces_the_motion():
     known = CASES["all"][0]
     rec = reconstruct(hist, known=known)
     assert max(rec.metrics["nrms_error"]) < 1e-5
-    assert rec.stability.verdict == "damped"  # (M + A) ë + B ė + C e = 0 with B > 0
+    assert rec.stability.prescribed.verdict == "damped"  # (M + A) ë + B ė + C e = 0 with B > 0
     assert rec.inputs["known"][-1] == "prescribed(F_exc)"
 
 

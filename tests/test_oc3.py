@@ -17,7 +17,8 @@ import pytest
 import scipy.optimize
 
 from hybridwsi.bodies import AxisymmetricBody, RigidAssembly, body_from_dict
-from hybridwsi.cases import bem_arguments, body_from_case, frequencies, load_case
+from hybridwsi.casemodel import bem_arguments, body_from_case, frequencies
+from hybridwsi.cases import load_case
 from hybridwsi.dofs import RIGID_DOFS, index
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import read_netcdf

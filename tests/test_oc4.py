@@ -17,7 +17,8 @@ import pytest
 from hybridwsi.bodies import ColumnsBody, Member, RigidAssembly, body_from_dict
 from hybridwsi.bodies.assembly import MassItem, combine
 from hybridwsi.bodies.quality import mesh_quality
-from hybridwsi.cases import bem_arguments, body_from_case, load_case
+from hybridwsi.casemodel import bem_arguments, body_from_case
+from hybridwsi.cases import from_dict, load_case, raw_case
 from hybridwsi.errors import InputError
 
 CASE = load_case("oc4_semi")
@@ -185,5 +186,11 @@ def test_bem_tables_of_the_case():
     assert args["wave_directions"] == pytest.approx(np.radians([0.0, 30.0, 60.0]))
     assert args["water_depth"] == 200.0 and args["panel_size"] == 1.25
     assert bem_arguments(CASE, "bem_quick")["panel_size"] == 3.0
-    with pytest.raises(InputError, match="wave_directions_deg"):
-        bem_arguments({**CASE, "bem": {**CASE["bem"], "wave_directions_deg": ["x"]}})
+    raw = raw_case("oc4_semi")
+    raw["bem"]["wave_directions_deg"] = ["x"]
+    with pytest.raises(InputError, match="bem.wave_directions_deg"):
+        from_dict(raw)  # the schema refuses it, naming the key
+    raw = raw_case("oc4_semi")
+    raw["body"]["hull"]["members"][0]["ends"] = [[0.0, 0.0, -20.0]]
+    with pytest.raises(InputError, match="members"):
+        from_dict(raw)

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from hybridwsi.cases import bem_arguments, load_case
+from hybridwsi.casemodel import bem_arguments
+from hybridwsi.cases import load_case
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.history import read_netcdf
 from hybridwsi.hydro import bem

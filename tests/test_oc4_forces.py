@@ -18,7 +18,8 @@ import pytest
 import xarray as xr
 
 from hybridwsi.bodies import RigidAssembly, member_elements
-from hybridwsi.cases import body_from_case, load_case
+from hybridwsi.casemodel import body_from_case
+from hybridwsi.cases import load_case
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
 from hybridwsi.forces import MemberMorison, MooringLines, MooringSystem

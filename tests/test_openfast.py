@@ -187,9 +187,9 @@ def test_text_out_units_degrees_loads_and_estimated_accelerations(tmp_path):
     assert json.loads(ds["F_hydro"].attrs["units_per_dof"]) == ["N", "N", "N m"]
     assert "HydroMyi" in ds["F_hydro"].attrs["description"]
     assert set(h.force_names(ds)) == {"F_hydro", "F_platform"}
-    assert ds["fairlead_tension"].dims == ("time", "line")
+    assert ds["T_fairlead"].dims == ("time", "line")
     assert list(ds["line"].values) == [1, 2, 3]
-    np.testing.assert_allclose(ds["fairlead_tension"].values[:, 2],
+    np.testing.assert_allclose(ds["T_fairlead"].values[:, 2],
                                1.0e6 + 3.0e4 * np.sin(w * t), rtol=6e-4)
     np.testing.assert_allclose(ds["eta"].values[:, 0], 2.0 * np.cos(w * t), atol=1e-3)
 

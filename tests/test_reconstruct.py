@@ -46,7 +46,7 @@ def test_case1_drifts_quadratically_under_a_force_bias():
     """Nothing known: a constant force error δ gives e(t) = δ t² / (2 m) (double integrator)."""
     delta = 0.01
     rec = reconstruct(_reference(bias=delta), mass=M)
-    assert rec.stability.verdict == "drift"
+    assert rec.stability.prescribed.verdict == "drift"
     np.testing.assert_allclose(rec.error[:, 0], delta * T**2 / (2 * M), atol=1e-5 * delta * 400 / M)
     assert rec.metrics["final_drift"][0] == pytest.approx(delta * T[-1] ** 2 / (2 * M), rel=1e-4)
 
@@ -55,7 +55,7 @@ def test_case2_stays_bounded_under_a_force_bias():
     """Hydrostatics known: e(t) = (δ/C)(1 − cos ω_n t), bounded by 2 δ / C."""
     delta = 0.01
     rec = reconstruct(_reference(bias=delta), known=[Hydrostatic(C_HS)], mass=M)
-    assert rec.stability.verdict == "neutral"
+    assert rec.stability.prescribed.verdict == "neutral"
     np.testing.assert_allclose(rec.error[:, 0], delta / C_HS * (1 - np.cos(WN * T)),
                                atol=1e-3 * delta / C_HS)  # spline error of F_tot ~1e-4
     assert rec.metrics["max_error"][0] <= 2 * delta / C_HS * (1 + 1e-4)
@@ -70,7 +70,7 @@ def test_moving_identified_damping_makes_errors_decay():
     late = T > 15.0
     plain = reconstruct(hist, known=[Hydrostatic(C_HS)])
     moved = reconstruct(hist, known=[Hydrostatic(C_HS)], move_identified=ident)
-    assert plain.stability.verdict == "neutral" and moved.stability.verdict == "damped"
+    assert plain.stability.prescribed.verdict == "neutral" and moved.stability.prescribed.verdict == "damped"
     amp_plain = np.abs(plain.error[late, 0]).max()
     amp_moved = np.abs(moved.error[late, 0]).max()
     # error envelope decays like exp(−B t / 2m) after the bump (≈ e^{-4.9} by t = 15 s)
@@ -96,8 +96,10 @@ def test_errors():
         def ode_force(self, t, z, zd, x):
             return np.full(1, np.nan)
 
-    with pytest.raises(SolverError):
-        reconstruct(hist, known=[Bad()])
+    bad = reconstruct(hist, known=[Bad()])  # a failed integration is data, not an exception
+    assert not bad.success and bad.history is None and bad.metrics["nrms_error"] == [math.inf]
+    with pytest.raises(SolverError, match="reconstruction"):
+        bad.solution.raise_on_failure()
     other = regress(hist)  # α = m: moving it leaves no inertia
     with pytest.raises(InputError, match="singular"):
         reconstruct(hist, move_identified=other)

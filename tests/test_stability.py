@@ -12,51 +12,66 @@ from hypothesis import strategies as st
 
 from _diag_cases import A_INF, C_HS, M
 from hybridwsi.diagnostic import (
+    CoupledStep,
     Hydrostatic,
+    StabilityReport,
     amplification_matrix,
     assess,
     lagged_step,
-    loosely_coupled_stability,
     max_stable_dt,
-    prescribed_force_stability,
     regress,
-    surrogate_stability,
 )
+from hybridwsi.diagnostic.stability import surrogate_stability
 from hybridwsi.errors import InputError
 from hybridwsi.history import make_history
 
 WN = math.sqrt(C_HS / M)
 
 
+def prescribed(*known):
+    """Setting (a) of ``m, A_k, B_k, C_k``."""
+    return assess(CoupledStep(*known)).prescribed
+
+
+def continuous(*matrices):
+    """Setting (b) of ``m, A_k, B_k, C_k, α, β, γ``."""
+    return assess(CoupledStep(*matrices)).continuous
+
+
+def lagged(*matrices, dt, scheme):
+    """The report of ``m, A_k, B_k, C_k, α, β, γ`` at ``dt`` with ``scheme``."""
+    return assess(CoupledStep(*matrices, dt=dt, scheme=scheme))
+
+
 # ------------------------------------------------------------------ (a) prescribed force
 def test_case1_drifts_case2_neutral_damping_decays():
-    case1 = prescribed_force_stability(M)
+    case1 = prescribed(M)
     assert case1.verdict == "drift" and not case1.stable
-    case2 = prescribed_force_stability(M, 0.0, 0.0, C_HS)
+    case2 = prescribed(M, 0.0, 0.0, C_HS)
     assert case2.verdict == "neutral"
     np.testing.assert_allclose(sorted(case2.eigenvalues.imag), [-WN, WN], rtol=1e-12)
-    case3 = prescribed_force_stability(M, A_INF, 0.0, C_HS)
+    case3 = prescribed(M, A_INF, 0.0, C_HS)
     np.testing.assert_allclose(np.abs(case3.eigenvalues), math.sqrt(C_HS / (M + A_INF)), rtol=1e-12)
-    damped = prescribed_force_stability(M, 0.0, 2.0, C_HS)
+    damped = prescribed(M, 0.0, 2.0, C_HS)
     assert damped.verdict == "damped"
     np.testing.assert_allclose(damped.eigenvalues.real, -2.0 / (2 * M), rtol=1e-10)
-    assert prescribed_force_stability(M, 0.0, 0.0, -C_HS).verdict == "unstable"
+    assert prescribed(M, 0.0, 0.0, -C_HS).verdict == "unstable"
     # damping without stiffness: offsets persist but do not grow (no Jordan block)
-    assert prescribed_force_stability(M, 0.0, 2.0, 0.0).verdict == "neutral"
+    assert prescribed(M, 0.0, 2.0, 0.0).verdict == "neutral"
 
 
 def test_two_dof_drift_only_in_the_unrestrained_direction():
     m = np.diag([7.0, 0.1])
     c = np.diag([700.0, 0.0])  # second DOF has no restoring force and no damping
-    rep = prescribed_force_stability(m, 0.0, 0.0, c)
+    rep = prescribed(m, 0.0, 0.0, c)
     assert rep.verdict == "drift" and rep.conditions["drift_directions"] == 1
-    assert prescribed_force_stability(m, 0.0, np.diag([0.0, 1.0]), c).verdict == "neutral"
+    assert prescribed(m, 0.0, np.diag([0.0, 1.0]), c).verdict == "neutral"
     json.dumps(rep.to_dict())
 
 
 def test_singular_inertia_is_an_input_error():
     with pytest.raises(InputError, match="singular"):
-        prescribed_force_stability(1.0, -1.0)
+        prescribed(1.0, -1.0)
 
 
 # ------------------------------------------------------------------ (b) surrogate in the loop
@@ -70,7 +85,7 @@ def test_surrogate_routh_hurwitz(dm, db, dc):
     """1 DOF: m_eff s² + b_eff s + c_eff is Hurwitz iff all three coefficients share a sign."""
     m, a_k, b_k, c_k = 2.0, 1.0, 0.5, 100.0
     alpha, beta, gamma = m + a_k - dm, b_k - db, c_k - dc
-    rep = surrogate_stability(m, a_k, b_k, c_k, alpha, beta, gamma)
+    rep = continuous(m, a_k, b_k, c_k, alpha, beta, gamma)
     hurwitz = (dm > 0 and db > 0 and dc > 0) or (dm < 0 and db < 0 and dc < 0)
     assert (rep.verdict == "stable") == hurwitz
     assert rep.conditions["mass_positive"] == (dm > 0)
@@ -79,7 +94,7 @@ def test_surrogate_routh_hurwitz(dm, db, dc):
 
 
 def test_surrogate_cancelling_inertia_is_unstable():
-    rep = surrogate_stability(M, A_INF, 0.0, C_HS, M + A_INF, 0.0, 0.0)
+    rep = continuous(M, A_INF, 0.0, C_HS, M + A_INF, 0.0, 0.0)
     assert rep.verdict == "unstable" and "algebraic loop" in rep.message
 
 
@@ -87,39 +102,42 @@ def test_surrogate_cancelling_inertia_is_unstable():
 @pytest.mark.parametrize("scheme", ["semi_implicit_euler", "newmark"])
 def test_added_mass_ratio_above_one_is_unstable_for_every_dt(scheme):
     mt = M + A_INF
-    assert max_stable_dt(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, scheme) == 0.0
+    step = CoupledStep(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, scheme=scheme)
+    assert max_stable_dt(step) == 0.0
     for dt in (1e-6, 1e-4, 1e-3):
-        rep = loosely_coupled_stability(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, dt, scheme)
-        assert rep.verdict == "unstable"
-        assert rep.conditions["added_mass_ratio"] == pytest.approx(1.2)
+        rep = lagged(M, A_INF, 1.0, C_HS, -1.2 * mt, 0.0, 0.0, dt=dt, scheme=scheme)
+        assert rep.loosely_coupled.verdict == "unstable" and not rep.stable
+        assert rep.added_mass_ratio == pytest.approx(1.2)
+        assert rep.loosely_coupled.conditions["added_mass_ratio"] == pytest.approx(1.2)
 
 
 @pytest.mark.parametrize("scheme", ["semi_implicit_euler", "newmark"])
 def test_added_mass_ratio_half_is_stable_for_small_dt(scheme):
     mt = M + A_INF
-    rep = loosely_coupled_stability(M, A_INF, 1.0, C_HS, -0.5 * mt, 0.0, 0.0, 1e-3, scheme)
-    assert rep.verdict == "stable" and rep.spectral_radius < 1.0
+    rep = lagged(M, A_INF, 1.0, C_HS, -0.5 * mt, 0.0, 0.0, dt=1e-3, scheme=scheme)
+    assert rep.loosely_coupled.verdict == "stable" and rep.spectral_radius < 1.0 and rep.stable
     assert rep.max_stable_dt > 1e-3
 
 
 def test_pure_lag_eigenvalue_is_alpha_over_mass():
     """Without B, C, β, γ the lagged acceleration obeys a_n = (α/M) a_{n−1} exactly."""
-    g = amplification_matrix(np.eye(1) * 2.0, np.eye(1), np.zeros((1, 1)), np.zeros((1, 1)),
-                             np.eye(1) * -0.9, np.zeros((1, 1)), np.zeros((1, 1)), 0.01)
+    g = amplification_matrix(CoupledStep(2.0, 1.0, 0.0, 0.0, -0.9, 0.0, 0.0, dt=0.01,
+                                         scheme="semi_implicit_euler"))
     assert np.sort(np.linalg.eigvals(g).real)[0] == pytest.approx(-0.3, abs=1e-12)
 
 
 def test_symplectic_euler_limit_is_two_over_omega():
     """Semi-implicit Euler on m z̈ + C z = 0 is stable iff Δt ≤ 2/ω_n (hand derivation)."""
-    dt_max = max_stable_dt(M, 0.0, 0.0, C_HS, 0.0, 0.0, 0.0, "semi_implicit_euler")
+    dt_max = max_stable_dt(CoupledStep(M, 0.0, 0.0, C_HS, scheme="semi_implicit_euler"))
     assert dt_max == pytest.approx(2.0 / WN, rel=1e-5)
     # a surrogate stiffness γ_s changes the effective ω: limit 2/sqrt((C − γ_s)/m)
-    dt_g = max_stable_dt(M, 0.0, 0.0, C_HS, 0.0, 0.0, 0.5 * C_HS, "semi_implicit_euler")
+    dt_g = max_stable_dt(CoupledStep(M, 0.0, 0.0, C_HS, 0.0, 0.0, 0.5 * C_HS,
+                                     scheme="semi_implicit_euler"))
     assert dt_g == pytest.approx(2.0 / math.sqrt(0.5 * C_HS / M), rel=1e-5)
 
 
 def test_newmark_average_acceleration_is_unconditionally_stable():
-    assert max_stable_dt(M, A_INF, 0.0, C_HS, 0.0, 0.0, 0.0, "newmark") == math.inf
+    assert max_stable_dt(CoupledStep(M, A_INF, 0.0, C_HS, scheme="newmark")) == math.inf
 
 
 def test_lagged_step_tracks_the_analytic_oscillator():
@@ -145,8 +163,42 @@ def test_assess_on_a_regression_result():
     # a "surrogate" force with α = −2 kg, β = −1 N s/m, γ = −50 N/m
     hist = make_history(t, z, zd, zdd, forces={"F_s": -2.0 * zdd - 1.0 * zd - 50.0 * z})
     res = regress(hist, force="F_s")
-    out = assess(res, M, [Hydrostatic(C_HS)], dt=0.01)
-    assert out["prescribed_force"].verdict == "neutral"
-    assert out["surrogate"].verdict == "stable"  # M+2, +1, C+50 all positive
-    assert out["loosely_coupled"].conditions["added_mass_ratio"] == pytest.approx(2.0 / M, rel=1e-6)
-    json.dumps({k: v.to_dict() for k, v in out.items()})
+    out = assess(CoupledStep.from_components(M, [Hydrostatic(C_HS)], res, dt=0.01))
+    assert out.prescribed.verdict == "neutral"
+    assert out.continuous.verdict == "stable"  # M+2, +1, C+50 all positive
+    assert out.added_mass_ratio == pytest.approx(2.0 / M, rel=1e-6)
+    np.testing.assert_allclose(out.step.alpha, res.alpha)  # the surrogate's α travels along
+    json.dumps(out.to_dict())
+
+
+def test_report_json_round_trip_keeps_every_verdict():
+    """The certificate of a learned component: ρ and the added-mass ratio at Δt, the largest
+    stable Δt, α, β, γ — through JSON and back, unchanged."""
+    step = CoupledStep(np.diag([M, 2 * M]), np.diag([A_INF, 0.0]), 0.5, np.diag([C_HS, 0.0]),
+                       -0.4 * np.eye(2), [[-1.0, 0.2], [0.1, -0.5]], np.diag([-30.0, 0.0]),
+                       dt=0.01, scheme="newmark", mode="corrected", corrections=2)
+    rep = assess(step)
+    back = StabilityReport.from_dict(json.loads(json.dumps(rep.to_dict())))
+    for k in ("mass", "known_mass", "known_damping", "known_stiffness", "alpha", "beta",
+              "gamma"):
+        np.testing.assert_array_equal(getattr(back.step, k), getattr(step, k))
+    assert (back.step.dt, back.step.scheme, back.step.mode, back.step.corrections) == \
+        (0.01, "newmark", "corrected", 2)
+    for k in ("spectral_radius", "added_mass_ratio", "max_stable_dt", "stable",
+              "continuous_stable"):
+        assert getattr(back, k) == getattr(rep, k), k
+    assert 0 < rep.max_stable_dt < math.inf
+    for a, b in zip(back.settings, rep.settings):
+        assert (a.setting, a.verdict, a.message) == (b.setting, b.verdict, b.message)
+        np.testing.assert_array_equal(a.eigenvalues, b.eigenvalues)
+    assert back.to_dict() == rep.to_dict()
+    # no learned part, Newmark: stable at every Δt (inf survives JSON as "inf")
+    free = assess(CoupledStep(M, A_INF, 0.0, C_HS, dt=0.01))
+    assert math.isinf(free.max_stable_dt)
+    assert math.isinf(StabilityReport.from_dict(json.loads(json.dumps(free.to_dict())))
+                      .max_stable_dt)
+
+
+def test_positional_continuous_setting_is_the_assessment():
+    args = (M, A_INF, 0.5, C_HS, -1.0, 0.2, 30.0)
+    assert surrogate_stability(*args).to_dict() == continuous(*args).to_dict()

@@ -35,7 +35,7 @@ def test_hybrid_cli_trains_checks_and_reports(tmp_path, files, capsys):
                "--epochs", "150", "--test-fraction", "0.34"])
     assert rc == 0
     rep = json.loads((tmp_path / "report.json").read_text())
-    assert rep["stability"]["stable"] and rep["stability"]["alpha_s"] == [[0.0]]
+    assert rep["stability"]["stable"] and rep["stability"]["step"]["alpha"] == [[0.0]]
     assert rep["inputs"]["n_train"] == 2 and len(rep["held_out_rms_error_z"]) == 1
     assert rep["held_out_rms_error_z"][0] < 0.5 and rep["held_out_r2_force"][0] > 0.95
     assert (tmp_path / "network.pt").is_file() and (tmp_path / "network.json").is_file()

@@ -8,8 +8,10 @@ import pytest
 torch = pytest.importorskip("torch")
 
 import synthetic_hydro as sh
+from _diag_cases import HeldSpring
 
 from hybridwsi.diagnostic import stability
+from hybridwsi.errors import InputError
 from hybridwsi.forces import Hydrostatic
 from hybridwsi.history import make_history
 from hybridwsi.surrogate.demo import (
@@ -74,8 +76,9 @@ def test_predicted_map_matches_stability_module(alpha, beta, gamma):
     case = _decay_case(0.01, dt, 0.2)
     net = _linear_net(alpha, beta, gamma, case)
     pred = check_stability(net, case, mass=M, known=[Hydrostatic(C)], dt=dt, mode="lagged")
-    ref = stability.loosely_coupled_stability(M, 0.0, 0.0, C, alpha, beta, gamma, dt, "newmark")
-    assert pred.spectral_radius == pytest.approx(ref.spectral_radius, rel=1e-9)
+    ref = stability.assess(stability.CoupledStep(M, 0.0, 0.0, C, alpha, beta, gamma, dt=dt))
+    assert pred.spectral_radius == pytest.approx(ref.loosely_coupled.spectral_radius, rel=1e-9)
+    assert pred.loosely_coupled.spectral_radius == ref.loosely_coupled.spectral_radius
     assert pred.added_mass_ratio == pytest.approx(abs(alpha) / M, rel=1e-9)
 
 
@@ -270,3 +273,24 @@ def test_compiled_loop_equals_numpy_stepper(mode, scheme):
             np.testing.assert_allclose(ha[var].values, ref, rtol=0,
                                        atol=1e-12 * np.nanmax(np.abs(ref)))
     np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+def test_stepped_component_in_the_rollout_is_the_lagged_coupling_of_its_force():
+    """A spring held over each step (begin_step at the start of the step) in the known part
+    with a zero network gives the rollout of a network −C z seen lagged: the same explicit
+    force −C z_n in the same step; begin_step runs once per step, for one case only."""
+    dt = 0.005
+    case = _decay_case(0.01, dt, 1.0)
+    spring = HeldSpring(C)
+    held = rollout(_linear_net(0.0, 0.0, 0.0, case), [case], mass=M, known=[spring],
+                   mode="lagged", check=False)
+    lagged = rollout(_linear_net(0.0, 0.0, -C, case), [case], mass=M, known=[],
+                     mode="lagged", check=False, compiled=False)
+    h, ref = held.histories[0], lagged.histories[0]
+    np.testing.assert_allclose(h["z"].values, ref["z"].values, rtol=0, atol=1e-12)
+    t = h["time"].values
+    np.testing.assert_array_equal([c[0] for c in spring.calls], t)  # once per step and the end
+    np.testing.assert_allclose(h["F_known"].values, -C * h["z"].values, rtol=1e-12)
+    with pytest.raises(InputError, match="one case at a time"):
+        rollout(_linear_net(0.0, 0.0, 0.0, case), [case, case], mass=M, known=[spring],
+                mode="lagged", check=False)

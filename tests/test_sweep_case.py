@@ -16,8 +16,8 @@ pytest.importorskip("zarr")
 pytest.importorskip("moorpy")
 
 from hybridwsi import cummins, sweep
-from hybridwsi.cases import load_case
-from hybridwsi.hydro.bem import case_coefficients
+from hybridwsi.cases import from_dict, load_case, raw_case
+from hybridwsi.casemodel import case_coefficients
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
 from hybridwsi.forces import MooringForce, MooringSystem, MorisonDrag, additional_damping
@@ -54,6 +54,8 @@ def test_case_configuration_comes_from_the_case(config):
         SweepConfig(dofs=("Surge",)).check()
     with pytest.raises(InputError, match="unknown case"):
         SweepConfig.for_case("no_such_case")
+    with pytest.raises(InputError, match="needs a case"):
+        SweepConfig(mooring="table").check()
 
 
 def test_sphere_settings_are_those_of_before_cases():
@@ -73,15 +75,19 @@ def test_settings_include_the_case_and_its_forces(config, shared):
     names = " ".join(current["forces"])
     for part in ("mooring(3 lines", "morison_drag(Cd 0.6", "linear_damping", "parked_rotor"):
         assert part in names
-    assert current["mooring_table"] == shared["_mooring_table"].dataset.attrs["input_hash"]
-    assert current["coeffs_hash"] == shared["_coeffs"].attrs["input_hash"]
+    model = shared["_model"]
+    assert current["mooring_table"] == model.mooring_table.dataset.attrs["input_hash"]
+    assert current["coeffs_hash"] == model.coeffs.attrs["input_hash"]
+    assert current["case_sha256"] == load_case("oc3_hywind").sha256
+    assert current["models"]["mooring"] == "table"
     base = sweep._digest(current)
     # a sea option, the drag's wave kinematics and the case's content all change the set-up
     for changed in (replace(config, gamma=2.0), replace(config, wave_kinematics=False)):
         assert sweep._digest(sweep.settings(changed, shared=shared)) != base
-    heavier_drag = load_case("oc3_hywind")
-    heavier_drag["hydrodynamics"]["drag_cd"] = 1.0
-    other = sweep.settings(config, shared={**shared, "_case": heavier_drag})
+    raw = raw_case("oc3_hywind")
+    raw["hydrodynamics"]["drag_cd"] = 1.0
+    heavier_drag = replace(model, case=from_dict(raw))
+    other = sweep.settings(config, shared={"_model": heavier_drag})
     assert other["case_sha256"] != current["case_sha256"]
     assert other["forces"] != current["forces"] and sweep._digest(other) != base
     # what is shipped to every worker: the coefficients, the state space and the table
@@ -108,7 +114,7 @@ def test_case_sweep_resumed_equals_uninterrupted(tmp_path, config, monkeypatch):
     setup = sweep.case_setup
 
     def once(cfg: SweepConfig) -> dict:
-        key = (cfg.case, cfg.coeffs, cfg.dofs, cfg.dt)
+        key = (cfg.case, cfg.coeffs, cfg.dofs, cfg.dt, cfg.mooring)
         if key not in built:
             built[key] = setup(cfg)
         return built[key]
@@ -219,3 +225,24 @@ def test_heave_statistics_match_the_frequency_domain(tmp_path):
         var += 0.5 * (abs(frequency_response(coeffs, w, f_hat, k33, b_add, dofs)[0]) * a) ** 2
     assert std_td == pytest.approx(np.sqrt(var), rel=2e-3)
     assert stats["cases"]["hs6_tp10_s0"]["eta"]["hs_4std"] == pytest.approx(hs, rel=0.02)
+
+
+def test_sweep_with_the_quasi_static_mooring_records_the_tensions(tmp_path):
+    """--mooring quasi-static: MoorPy solved every call, the tensions stored per sea and
+    summarised per line in the manifest (mean, std, max after the ramp)."""
+    cfg = SweepConfig.for_case("oc3_hywind", duration=10.0, dt=0.1, ramp=2.0,
+                               mooring="quasi-static")
+    store = sweep.run_sweep(sweep.case_grid([4.0], [10.0], 1), tmp_path, cfg,
+                            scheduler="synchronous", progress=False)
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["settings"]["mooring"] == "quasi-static"
+    assert manifest["inputs"]["models"]["mooring"] == "quasi-static"
+    assert manifest["inputs"]["mooring_table"] is None
+    hist = sweep.case_history(sweep.open_sweep(store), 0)
+    after = hist["time"].values >= 2.0
+    stats = manifest["statistics"]["cases"]["hs4_tp10_s0"]["T_fairlead"]
+    for k, line in enumerate(("1", "2", "3")):
+        t = hist["T_fairlead"].values[after, k]
+        assert stats[line]["max"] == pytest.approx(t.max(), rel=1e-12)
+        assert stats[line]["mean"] == pytest.approx(t.mean(), rel=1e-12)
+    assert {"F_mooring", "F_morison", "F_damping", "F_rotor", "T_anchor"} <= set(hist.data_vars)

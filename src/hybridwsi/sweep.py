@@ -16,19 +16,22 @@ Two set-ups:
 
 - the paper sphere (no ``case``): heave only, the shipped or given coefficients, optionally the
   exact sphere buoyancy (:func:`cummins_case`);
-- a built-in case as data (``SweepConfig.for_case("oc3_hywind")``; :func:`case_sea`): the case's
-  coefficients (its ``[bem]`` table; the shipped file when the inputs match), DOFs (default the
-  case's ``default_dofs``) and force components (:func:`case_forces`: tabulated MoorPy mooring,
-  Morison drag with the wave particle velocity, additional linear damping, rotor), defaults from
-  the case's ``[sweep]`` table. Everything the cases share (coefficients, radiation state-space
-  fit, mooring table) is built ONCE on the client (:func:`case_setup`) and shipped to the
-  workers (OC3: 0.43 MB, of which the table 0.31 MB, pickled and unpickled in ~3 ms;
-  tabulating costs 0.6-1.2 s of MoorPy solves).
+- a case, built-in or a TOML file (``SweepConfig.for_case("oc3_hywind")``; :func:`case_sea`):
+  the case's coefficients (its ``[bem]`` table; the shipped file when the inputs match), DOFs
+  (default the case's ``default_dofs``) and force components, each recorded in the history
+  with the line tensions (:mod:`hybridwsi.casemodel`: the mooring as the case's model or
+  ``mooring``, Morison drag with the wave particle velocity, additional linear damping,
+  rotor), defaults from the case's ``[sweep]`` table. Everything the seas share
+  (coefficients, radiation state-space fit, mooring table) is one
+  :class:`~hybridwsi.casemodel.CaseModel` built ONCE on the client (:func:`case_setup`) and
+  shipped to the workers (OC3: 0.43 MB, of which the table 0.31 MB, pickled and unpickled in
+  ~3 ms; tabulating costs 0.6-1.2 s of MoorPy solves).
 
 Runners are plain top-level functions ``runner(case: dict, config: dict) -> TimeHistory`` so
 that they pickle to workers; :func:`default_runner` picks one from the configuration. The
 manifest also holds per-case motion statistics (:func:`sea_statistics`: mean, std, min, max per
-DOF after the ramp, and 4 std(eta)) and the library versions.
+DOF after the ramp, 4 std(eta), the line tensions' mean, std and max per line) and the library
+versions.
 """
 
 from __future__ import annotations
@@ -49,10 +52,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import bodies, cummins, waves
 from hybridwsi._meta import version
+from hybridwsi.casemodel import CaseModel, case_coefficients, radiation_ss
+from hybridwsi.cases import case_path, is_builtin, load_case
 from hybridwsi.dofs import check_dofs, motion_unit
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, check_compatible, read_netcdf, to_netcdf
+from hybridwsi.hydro import bem
 
 Runner = Callable[[dict, dict], xr.Dataset]
 PARTS = "parts"
@@ -83,8 +90,9 @@ class SweepConfig:
     ramp : float
         Half-cosine ramp [s] of the wave excitation (and of the drag's wave velocity).
     case : str or None
-        A built-in case (``hybridwsi.cases``, e.g. ``"oc3_hywind"``): its coefficients, DOFs and
-        force components (:func:`case_forces`); None = the paper sphere.
+        A case: a built-in name (``hybridwsi.cases``, e.g. ``"oc3_hywind"``) or a TOML file;
+        its coefficients, DOFs and force components (:mod:`hybridwsi.casemodel`); None = the
+        paper sphere.
     dofs : tuple of str or None
         DOFs to simulate; None = the case's ``default_dofs`` (sphere: Heave, the only choice).
     gamma : float or None
@@ -94,6 +102,9 @@ class SweepConfig:
         (Δω = 3.5 ωp / n: ~570 s at Tp 10 s with 200).
     wave_kinematics : bool or None
         With ``case``: the Morison drag sees the wave particle velocity (None = yes).
+    mooring : str or None
+        With ``case``: the mooring model (``table``, ``quasi-static``, ``moordyn``) instead of
+        the case's ``[forces] mooring``.
 
     The fields from ``case`` on are left out of :func:`settings` while None, so a sphere sweep
     started by an earlier version keeps its settings hash and can be resumed.
@@ -110,6 +121,7 @@ class SweepConfig:
     gamma: float | None = None
     wave_components: int | None = None
     wave_kinematics: bool | None = None
+    mooring: str | None = None
 
     def __post_init__(self) -> None:
         if self.dofs is not None:  # one spelling, a tuple (a TOML list or "surge,pitch")
@@ -117,16 +129,11 @@ class SweepConfig:
 
     @classmethod
     def for_case(cls, name: str, **options: Any) -> SweepConfig:
-        """The configuration of a case: its ``[sweep]`` table (:data:`CASE_SWEEP_KEYS`) and
-        ``default_dofs``, overridden by the ``options`` that are not None."""
-        from hybridwsi.cases import load_case
-
+        """The configuration of a case (a built-in name or a TOML file): its ``[sweep]``
+        table (:data:`CASE_SWEEP_KEYS`, checked by the case schema) and ``default_dofs``,
+        overridden by the ``options`` that are not None."""
         spec = load_case(name)
         table = spec.get("sweep", {})
-        unknown = sorted(set(table) - set(CASE_SWEEP_KEYS))
-        if unknown:
-            raise InputError(f"case {name!r}: [sweep] has unknown keys {unknown} (allowed: "
-                             f"{', '.join(CASE_SWEEP_KEYS)})")
         given = {k: v for k, v in options.items() if v is not None}
         merged = {**table, **given}
         if merged.get("dofs") is None and spec.get("default_dofs"):
@@ -150,6 +157,9 @@ class SweepConfig:
                                  "use a case (--case) or 'hybridwsi simulate --dofs'")
             if self.wave_kinematics is not None:
                 raise InputError("wave kinematics belong to a case's Morison drag (--case)")
+            if self.mooring is not None:
+                raise InputError("a mooring model (--mooring) needs a case with a mooring "
+                                 "(--case)")
             return
         if self.mass is not None:
             raise InputError("a case's body gives its mass matrix; do not give a mass with it")
@@ -163,7 +173,7 @@ SPHERE_DOFS = ("Heave",)
 CASE_SWEEP_KEYS = ("duration", "dt", "ramp", "dofs", "gamma", "wave_components",
                    "wave_kinematics")
 #: SweepConfig fields left out of the settings while None (added with cases)
-_OPTIONAL_FIELDS = ("case", "dofs", "gamma", "wave_components", "wave_kinematics")
+_OPTIONAL_FIELDS = ("case", "dofs", "gamma", "wave_components", "wave_kinematics", "mooring")
 
 
 def case_grid(hs: Sequence[float], tp: Sequence[float], seeds: int | Sequence[int]) -> list[dict]:
@@ -190,37 +200,19 @@ def load_coefficients(path: str | os.PathLike | None = None) -> xr.Dataset:
     sphere's, as shipped with the package (``hydro.bem.paper_coefficients``; no BEM run)."""
     if path:
         return read_netcdf(path)
-    from hybridwsi.hydro import bem
-
     return bem.paper_coefficients()
 
 
 def sea(case: dict, config: dict) -> Any:
     """The JONSWAP sea of one case (Hs, Tp, seed) with the configuration's γ and components."""
-    from hybridwsi import waves
-
     options = {k: config[key] for k, key in (("gamma", "gamma"), ("n_components",
                "wave_components")) if config.get(key) is not None}
     return waves.JONSWAP(hs=case["hs"], tp=case["tp"], seed=int(case["seed"]), **options)
 
 
-def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float) -> Any:
-    """The radiation state space ``cummins.simulate`` would fit itself (same tolerance),
-    fitted once on the client and shipped to the workers."""
-    import inspect
-
-    from hybridwsi import cummins
-
-    tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
-    return cummins.build_system(coeffs, dofs=dofs, mass=mass, radiation="statespace", dt=dt,
-                                ss_tol=tol).ss
-
-
 def cummins_case(case: dict, config: dict) -> xr.Dataset:
     """One irregular-sea Cummins run of the paper sphere (JONSWAP Hs, Tp, seed) -> TimeHistory
     with ``eta``."""
-    from hybridwsi import bodies, cummins
-
     coeffs = config.get("_coeffs")
     if coeffs is None:
         coeffs = load_coefficients(config.get("coeffs"))
@@ -235,11 +227,8 @@ def cummins_case(case: dict, config: dict) -> xr.Dataset:
 
 def sweep_coefficients(manifest: dict) -> xr.Dataset:
     """The coefficients a sweep ran with, from its ``manifest.json`` (parsed): the file it
-    was given, else its case's (:func:`~hybridwsi.hydro.bem.case_coefficients`), else the
+    was given, else its case's (:func:`~hybridwsi.casemodel.case_coefficients`), else the
     paper sphere's."""
-    from hybridwsi.cases import load_case
-    from hybridwsi.hydro.bem import case_coefficients
-
     cfg = manifest.get("config", {})
     if cfg.get("coeffs"):
         return load_coefficients(cfg["coeffs"])
@@ -248,60 +237,12 @@ def sweep_coefficients(manifest: dict) -> xr.Dataset:
     return load_coefficients()
 
 
-def case_forces(spec: dict, dofs: Sequence[str], *, wave: Any = None, ramp: float = 0.0,
-                mooring_table: Any = None) -> list:
-    """The force components of a case on ``dofs`` (each present only if the case has it).
-
-    - ``[mooring]``: :class:`~hybridwsi.forces.MooringForce`, the tabulated nonlinear MoorPy
-      force ``F(q) - F0`` (``mooring_table``: a table already built, else tabulated here);
-    - ``[hydrodynamics] drag_cd``: :class:`~hybridwsi.forces.MorisonDrag` on the hull profile,
-      with the particle velocity of ``wave`` (ramped like the excitation) when given;
-    - ``[hydrodynamics] additional_damping``: the additional linear damping;
-    - ``[rotor]``: :func:`~hybridwsi.forces.rotor_from_case` (parked: no force).
-    """
-    from hybridwsi.forces import (
-        MooringForce,
-        MorisonDrag,
-        additional_damping,
-        rotor_from_case,
-    )
-
-    hydro = spec.get("hydrodynamics", {})
-    out = []
-    if "mooring" in spec:
-        out.append(MooringForce.from_case(spec, dofs) if mooring_table is None
-                   else MooringForce(mooring_table, dofs))
-    if hydro.get("drag_cd"):
-        out.append(MorisonDrag.from_case(spec, dofs, wave=wave, ramp=ramp))
-    if hydro.get("additional_damping"):
-        out.append(additional_damping(spec, dofs))
-    if "rotor" in spec:
-        out.append(rotor_from_case(spec, dofs))
-    return out
-
-
 def case_setup(config: SweepConfig) -> dict:
-    """What every case of a case sweep shares, built once (on the client) and shipped.
-
-    Returns ``{"_case": the case dict, "_dofs", "_coeffs", "_radiation_ss",
-    "_mooring_table"}`` (the table None when the case has no mooring).
-    """
-    from hybridwsi.cases import load_case
-    from hybridwsi.hydro.bem import case_coefficients
-    from hybridwsi.forces import MooringForce
-    from hybridwsi.hydro import coefficients as cf
-
-    spec = load_case(str(config.case))
-    coeffs = load_coefficients(config.coeffs) if config.coeffs else case_coefficients(spec)
-    dofs = check_dofs(config.dofs or spec.get("default_dofs") or cf.dofs(coeffs))
-    missing = [d for d in dofs if d not in cf.dofs(coeffs)]
-    if missing:
-        raise InputError(f"the coefficients of case {config.case!r} have no DOF "
-                         f"{', '.join(missing)} (they have {', '.join(cf.dofs(coeffs))})")
-    table = MooringForce.from_case(spec, dofs).table if "mooring" in spec else None
-    return {"_case": spec, "_dofs": dofs, "_coeffs": coeffs,
-            "_radiation_ss": radiation_ss(coeffs, dofs, None, config.dt),
-            "_mooring_table": table}
+    """What every sea of a case sweep shares, built once (on the client) and shipped:
+    ``{"_model": CaseModel}`` (coefficients, DOFs, mooring model and table, radiation state
+    space fitted for the sweep's dt)."""
+    return {"_model": CaseModel.build(str(config.case), dofs=config.dofs, coeffs=config.coeffs,
+                                      mooring=config.mooring, dt=config.dt)}
 
 
 def _public(config: dict) -> SweepConfig:
@@ -310,24 +251,17 @@ def _public(config: dict) -> SweepConfig:
 
 
 def case_sea(case: dict, config: dict) -> xr.Dataset:
-    """One irregular-sea Cummins run of a built-in case -> TimeHistory with ``eta``.
+    """One irregular-sea Cummins run of a case -> TimeHistory with ``eta``, every force
+    component and the line tensions (:meth:`hybridwsi.casemodel.CaseModel.simulate`).
 
-    The case's coefficients, DOFs and force components (:func:`case_forces`); the shared
-    objects come from ``config`` (:func:`case_setup`, shipped by :func:`run_sweep`) or are
-    built here when absent.
+    The shared model comes from ``config`` (:func:`case_setup`, shipped by :func:`run_sweep`)
+    or is built here when absent.
     """
-    from hybridwsi import cummins
-
-    shared = config if "_case" in config else case_setup(_public(config))
-    wave = sea(case, config)
-    ramp = float(config.get("ramp", 0.0))
-    kinematics = config.get("wave_kinematics") is not False  # None: yes
-    forces = case_forces(shared["_case"], shared["_dofs"], wave=wave if kinematics else None,
-                         ramp=ramp, mooring_table=shared["_mooring_table"])
-    return cummins.simulate(
-        shared["_coeffs"], dofs=shared["_dofs"], duration=float(config["duration"]),
-        dt=float(config["dt"]), ramp=ramp, wave=wave, forces=forces,
-        radiation_ss=shared["_radiation_ss"])
+    shared = config if "_model" in config else case_setup(_public(config))
+    return shared["_model"].simulate(
+        duration=float(config["duration"]), dt=float(config["dt"]), wave=sea(case, config),
+        ramp=float(config.get("ramp", 0.0)),
+        wave_kinematics=config.get("wave_kinematics") is not False)  # None: yes
 
 
 def default_runner(config: SweepConfig) -> Runner:
@@ -395,8 +329,8 @@ def settings(config: SweepConfig, runner: Runner | None = None, shared: dict | N
 
     With a case also (:func:`case_settings`): the SHA-256 of the case's content, the
     coefficients' input hash, the DOFs simulated, every force component (its description) and
-    the mooring table's input hash. ``shared``: :func:`case_setup` of ``config`` if already
-    built (else built here, ~3 s for OC3-Hywind).
+    the mooring model and table's input hash. ``shared``: :func:`case_setup` of ``config`` if
+    already built (else built here, ~3 s for OC3-Hywind).
     """
     runner = default_runner(config) if runner is None else runner
     cfg = asdict(config)
@@ -405,6 +339,8 @@ def settings(config: SweepConfig, runner: Runner | None = None, shared: dict | N
             del cfg[key]
     if config.coeffs:  # the same file from another working directory is the same set-up
         cfg["coeffs"] = str(Path(config.coeffs).resolve())
+    if config.case and not is_builtin(config.case):  # a user's file, from any folder
+        cfg["case"] = str(case_path(config.case).resolve())
     cfg["coeffs_sha256"] = _file_digest(config.coeffs) if config.coeffs else None
     cfg["runner"] = f"{getattr(runner, '__module__', '?')}.{getattr(runner, '__qualname__', runner)}"
     if config.case:
@@ -413,15 +349,9 @@ def settings(config: SweepConfig, runner: Runner | None = None, shared: dict | N
 
 
 def case_settings(shared: dict) -> dict:
-    """The set-up of a case sweep as plain values (from :func:`case_setup`)."""
-    from hybridwsi.cummins import coeffs_hash
-
-    spec, table = shared["_case"], shared["_mooring_table"]
-    forces = case_forces(spec, shared["_dofs"], mooring_table=table)
-    return {"dofs": list(shared["_dofs"]), "case_sha256": _digest(spec),
-            "coeffs_hash": coeffs_hash(shared["_coeffs"]),
-            "forces": [f.describe() for f in forces],
-            "mooring_table": None if table is None else table.dataset.attrs.get("input_hash")}
+    """The set-up of a case sweep as plain values (:meth:`CaseModel.settings` of
+    :func:`case_setup`)."""
+    return shared["_model"].settings()
 
 
 def _digest(current: dict) -> str:
@@ -599,8 +529,9 @@ def sea_statistics(sweep: xr.Dataset, start: float = 0.0) -> dict:
     -------
     dict
         ``{"window_s": [start, end], "cases": {case_id: {dof: {"mean", "std", "min", "max",
-        "unit"}, "eta": {"std", "hs_4std"}}}}`` in m or rad per DOF; ``hs_4std`` = 4 std(η)
-        [m], the significant wave height the sea actually had at the wave probe.
+        "unit"}, "eta": {"std", "hs_4std"}, "T_fairlead": {line: {"mean", "std", "max"}},
+        "T_anchor": ...}}}`` in m or rad per DOF, N per line; ``hs_4std`` = 4 std(η) [m], the
+        significant wave height the sea actually had at the wave probe.
     """
     t = sweep["time"].values
     keep = t >= start - 1e-9 * max(1.0, abs(start))
@@ -614,6 +545,8 @@ def sea_statistics(sweep: xr.Dataset, start: float = 0.0) -> dict:
         e = sweep["eta"].isel(time=np.flatnonzero(keep))
         eta = e.std("time").transpose("case", ...).values.reshape(e.sizes["case"], -1)[:, 0]
     dofs = [str(d) for d in sweep["dof"].values]
+    tensions = {var: _line_statistics(sweep[var].isel(time=np.flatnonzero(keep)))
+                for var in ("T_fairlead", "T_anchor") if var in sweep}
     cases = {}
     for i, cid in enumerate(str(c) for c in sweep["case"].values):
         row: dict[str, Any] = {
@@ -621,16 +554,26 @@ def sea_statistics(sweep: xr.Dataset, start: float = 0.0) -> dict:
             for j, d in enumerate(dofs)}
         if eta is not None:
             row["eta"] = {"std": float(eta[i]), "hs_4std": float(4.0 * eta[i]), "unit": "m"}
+        row.update({var: values[i] for var, values in tensions.items()})
         cases[cid] = row
     return {"window_s": [float(t[keep][0]), float(t[-1])], "cases": cases}
+
+
+def _line_statistics(tension: xr.DataArray) -> list[dict[str, Any]]:
+    """Per case: ``{line: {"mean", "std", "max", "unit"}}`` of a tension [N]."""
+    stats = {name: getattr(tension, name)("time").transpose("case", "line").values
+             for name in ("mean", "std", "max")}
+    lines = [str(v) for v in tension["line"].values]
+    return [{line: {**{k: float(v[i, j]) for k, v in stats.items()}, "unit": "N"}
+             for j, line in enumerate(lines)} for i in range(tension.sizes["case"])]
 
 
 def _write_manifest(out: Path, cases: Sequence[dict], current: dict, status: str,
                     statistics: dict | None = None) -> None:
     config = {k: v for k, v in current.items() if k not in ("coeffs_sha256", "runner")}
     inputs = {k: current[k] for k in ("case", "case_sha256", "coeffs", "coeffs_sha256",
-                                      "coeffs_hash", "dofs", "forces", "mooring_table")
-              if k in current}
+                                      "coeffs_hash", "dofs", "forces", "models",
+                                      "mooring_table") if k in current}
     meta = {"hybridwsi_version": version(), "versions": library_versions(), "status": status,
             "inputs": inputs, "config": config, "settings": current,
             "settings_hash": _digest(current), "n_cases": len(cases), "cases": list(cases)}

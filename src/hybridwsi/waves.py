@@ -29,11 +29,13 @@ width Δω over ``omega_range``), amplitudes ``a_j = sqrt(2 S(ω_j) Δω)`` and 
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.fft
 import scipy.integrate
 import scipy.optimize
 import xarray as xr
@@ -118,6 +120,10 @@ class Wave:
     """Base class: subclasses implement :meth:`components` and :meth:`to_dict`."""
 
     direction: float = 0.0
+    #: components below the coefficients' lowest frequency are allowed: their transfer
+    #: function is interpolated towards the long-wave limit (:func:`long_wave_limit`); a
+    #: record's content there. Synthetic seas must lie inside the range.
+    long_waves: bool = False
 
     def components(self) -> WaveComponents:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -275,6 +281,99 @@ class PiersonMoskowitz(JONSWAP):
                          omega_range=omega_range, direction=direction)
 
 
+class ElevationRecord(Wave):
+    """A recorded wave elevation η(t) at the body's reference point, as a wave.
+
+    Its components are the discrete Fourier transform of the record padded with zeros to
+    ``pad`` times its length (``scipy.fft.next_fast_len``): the excitation force
+    ``F_exc = Re[Σ_j c_j F_e(ω_j) e^{-iω_j t}]`` (:func:`excitation_force`) is then the
+    convolution of the record with the excitation impulse response (non-causal: the force
+    at t feels the elevation before and after t), evaluated at any time, the solver's half
+    steps included. The padding makes that convolution linear instead of circular (the end of
+    the record does not wrap onto its start), exactly for impulse responses shorter than
+    ``(pad - 1)`` record lengths; the record is taken as calm before its first and after its
+    last sample, so the force within one impulse-response length of either end feels the
+    missing sea (ramp the start; leave the end out of comparisons: tests/test_wave_elevation.py
+    measures it).
+
+    η is taken as measured from the still-water level, its mean included: the mean of a
+    finite record of waves is not zero (25.3 periods of a regular wave: 0.6 % of its
+    amplitude), and removing it would shift the heave force by ρ g A_wp times that mean (1.3 %
+    of the sphere's force amplitude). A probe with a datum offset must be corrected first.
+    Components above ``omega_max`` (the coefficients' highest frequency) are left out
+    (:attr:`variance_outside` is their share of η's variance); those below the coefficients'
+    lowest frequency, the mean among them, take the transfer function interpolated between
+    its long-wave limit (:func:`long_wave_limit`: a uniform rise of the water, ``C[:, Heave]``)
+    and its value there (:attr:`Wave.long_waves`).
+
+    Parameters
+    ----------
+    time : array, shape (n,)
+        Sample times [s], uniform (the first sample becomes t = 0 of the wave).
+    eta : array, shape (n,)
+        Elevation [m] at the reference point.
+    omega_max : float, optional
+        Highest frequency kept [rad/s]; None: all but the Nyquist bin.
+    pad : float
+        Padded length over the record length (>= 2 for a linear convolution).
+    source : str
+        Where the record came from (recorded by :meth:`to_dict`).
+    direction : float
+        Propagation direction [rad] of the excitation transfer function used.
+    """
+
+    long_waves = True
+
+    def __init__(self, time: Any, eta: Any, *, omega_max: float | None = None,
+                 pad: float = 2.0, source: str = "", direction: float = 0.0) -> None:
+        t = np.asarray(time, dtype=float)
+        x = np.asarray(eta, dtype=float)
+        if t.ndim != 1 or x.shape != t.shape or t.size < 8:
+            raise InputError("a wave-elevation record needs matching 1-D time and eta with "
+                             ">= 8 samples")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+            raise InputError("the wave-elevation record holds NaN or inf")
+        dt = _uniform_step(t)
+        if dt is None:
+            raise InputError("the wave-elevation record's time is not uniformly sampled "
+                             "(resample it first)")
+        if not pad >= 1.0:
+            raise InputError(f"pad must be >= 1, got {pad}")
+        self.dt, self.t0, self.n = float(dt), float(t[0]), int(t.size)
+        self.duration = self.dt * (self.n - 1)
+        self.source, self.direction = source, float(direction)
+        self.mean = float(np.mean(x))
+        m = scipy.fft.next_fast_len(int(math.ceil(pad * self.n)), real=True)
+        spectrum = np.fft.rfft(x, n=m)
+        omega = 2.0 * np.pi * np.arange(spectrum.size) / (m * self.dt)
+        inner = np.ones(spectrum.size, dtype=bool)
+        if m % 2 == 0:
+            inner[-1] = False  # the Nyquist bin has no phase; never kept
+        keep = inner.copy()
+        if omega_max is not None:
+            keep &= omega <= float(omega_max) * (1 + 1e-12)
+        # η_k = Re Σ_j c_j e^{-iω_j t_k} with c_j = 2 conj(X_j) / m (rfft: Σ η e^{-iωt}),
+        # the mean (ω = 0) counted once
+        c = 2.0 * np.conj(spectrum) / m
+        c[0] /= 2.0
+        power = np.abs(c) ** 2
+        total = power[inner].sum()
+        self.variance_outside = float(power[inner & ~keep].sum() / total) if total > 0 else 0.0
+        self.omega_max = None if omega_max is None else float(omega_max)
+        self.sha256 = hashlib.sha256(np.ascontiguousarray(np.column_stack([t, x])).tobytes()
+                                     ).hexdigest()
+        self._components = WaveComponents(np.abs(c[keep]), omega[keep], -np.angle(c[keep]))
+
+    def components(self) -> WaveComponents:
+        return self._components
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": "elevation_record", "source": self.source, "sha256": self.sha256,
+                "n_samples": self.n, "dt": self.dt, "t0": self.t0, "mean": self.mean,
+                "omega_max": self.omega_max, "variance_outside": self.variance_outside,
+                "n_components": int(self._components.omega.size), "direction": self.direction}
+
+
 def wave_from_dict(d: dict[str, Any]) -> Wave:
     """Rebuild a wave from :meth:`Wave.to_dict` output."""
     d = dict(d)
@@ -287,6 +386,9 @@ def wave_from_dict(d: dict[str, Any]) -> Wave:
         if kind == "piersonmoskowitz":
             d.pop("gamma", None)
             return PiersonMoskowitz(**d)
+        if kind == "elevation_record":
+            raise InputError("a wave-elevation record is not stored in its description; "
+                             "read the record again (hybridwsi simulate --wave-elevation)")
     except TypeError as exc:
         raise InputError(f"bad wave description: {exc}") from None
     raise InputError(f"unknown wave type '{kind}' (regular, jonswap, piersonmoskowitz)")
@@ -417,7 +519,7 @@ class AiryKinematics:
                              f"(depth {depth:g} m)")
         ramp_factor(np.zeros(1), ramp)  # validates the ramp (finite, >= 0)
         comp = wave.components()
-        keep = comp.amplitude > 0
+        keep = (comp.amplitude > 0) & (comp.omega > 0)  # a still level (ω = 0) has no flow
         omega, amp = comp.omega[keep], comp.amplitude[keep]
         k = dispersion_k(omega, depth, g)
         beta = float(getattr(wave, "direction", 0.0))
@@ -567,6 +669,38 @@ def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float
     return np.asarray(coeffs["omega"].values, dtype=float), vals
 
 
+def long_wave_limit(coeffs: xr.Dataset, dofs: list[str]) -> np.ndarray:
+    """``F_e(ω → 0)`` [N/m, N m/m] on ``dofs``: a wave much longer than the body lifts the
+    water around it uniformly, so the force per unit elevation is the hydrostatic stiffness
+    against heave, ``C[dof, Heave]`` (C33; C35, C34 through the waterplane's moments); zero
+    when the coefficients have no heave."""
+    if "hydrostatic_stiffness" not in coeffs:
+        raise InputError("coefficients have no 'hydrostatic_stiffness': the long-wave limit "
+                         "of the excitation force is unknown")
+    c = coeffs["hydrostatic_stiffness"]
+    if "Heave" not in [str(d) for d in c["radiating_dof"].values]:
+        return np.zeros(len(dofs))
+    column = c.sel(radiating_dof="Heave")
+    have = [str(d) for d in column["influenced_dof"].values]
+    return np.array([float(column.values[have.index(d)]) if d in have else 0.0 for d in dofs])
+
+
+def components_within(wave: Wave, grid: np.ndarray, what: str, hint: str, *,
+                      allow_below: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [rad/s] and complex amplitudes ``a e^{-iφ}`` [m] of the wave's components
+    with a nonzero amplitude, checked to lie inside ``grid``'s range (a transfer function is
+    interpolated there, never extrapolated; else :class:`InputError` naming ``what`` and
+    ``hint``). ``allow_below``: components below the range are the caller's to handle."""
+    comp = wave.components()
+    keep = comp.amplitude > 0
+    w = comp.omega[keep]
+    below = bool(w.size) and w.min() < grid[0] * (1 - 1e-9) and not allow_below
+    if w.size and (below or w.max() > grid[-1] * (1 + 1e-9)):
+        raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside "
+                         f"{what} {grid[0]:.4g}–{grid[-1]:.4g} rad/s ({hint})")
+    return w, comp.complex_amplitude[keep]
+
+
 def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
                      dof: str | list[str] = "Heave", *, ramp: float = 0.0,
                      with_elevation: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -585,16 +719,15 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
     """
     dofs = [dof] if isinstance(dof, str) else list(dof)
     w_grid, vals = _excitation_transfer(coeffs, dofs, float(getattr(wave, "direction", 0.0)))
-    comp = wave.components()
-    keep = comp.amplitude > 0
-    w = comp.omega[keep]
-    if w.size and (w.min() < w_grid[0] * (1 - 1e-9) or w.max() > w_grid[-1] * (1 + 1e-9)):
-        raise InputError(f"wave frequencies {w.min():.4g}–{w.max():.4g} rad/s fall outside the "
-                         f"coefficients' range {w_grid[0]:.4g}–{w_grid[-1]:.4g} rad/s "
-                         "(narrow omega_range or recompute the BEM coefficients)")
+    w, amplitude = components_within(wave, w_grid, "the coefficients' range",
+                                     "narrow omega_range or recompute the BEM coefficients",
+                                     allow_below=wave.long_waves)
+    if w.size and w.min() < w_grid[0] * (1 - 1e-9):  # a record's long waves: towards ω = 0
+        w_grid = np.concatenate([[0.0], w_grid])
+        vals = np.concatenate([long_wave_limit(coeffs, dofs)[None, :], vals])
     tf = np.stack([np.interp(w, w_grid, vals[:, i].real) + 1j * np.interp(w, w_grid, vals[:, i].imag)
                    for i in range(len(dofs))], axis=1)
-    c = comp.complex_amplitude[keep][:, None]
+    c = amplitude[:, None]
     both = harmonic_sum(t, np.concatenate([c * tf, c], axis=1), w)
     force, eta = both[:, :-1], both[:, -1]
     force *= ramp_factor(t, ramp)[:, None]

@@ -194,6 +194,9 @@ def _good_files(folder: Path) -> None:
     to_netcdf(sh.coefficients(np.linspace(0.1, 40.0, 60)), folder / "good_coeffs.nc")
     (folder / "good_force.csv").write_text("time [s],F [N]\n0,0\n100,1\n")
     (folder / "good_hist.csv").write_text(_csv(_good_rows()))
+    # a case file with one unknown key (the bad-option cases of --case read it)
+    (folder / "case_unknown_key.toml").write_text(
+        '[body]\ntype = "sphere"\nradius = 0.15\ncolour = "red"\n')
 
 
 def make_corpus(folder: str | os.PathLike) -> list[str]:
@@ -394,6 +397,29 @@ BAD_OPTIONS: dict[str, list[str]] = {
     "sweep-no-kinematics-without-case": ["sweep", "--hs", "0.1", "--tp", "1",
                                          "--no-wave-kinematics", "--out", "{out}/s"],
     "sweep-out-file": ["sweep", "--hs", "0.1", "--tp", "1", "--out", "good_force.csv"],
+    "sweep-mooring-without-case": ["sweep", "--hs", "0.1", "--tp", "1", "--mooring", "table",
+                                   "--out", "{out}/s"],
+    "sweep-case-broken-file": ["sweep", "--case", "case_unknown_key.toml", "--hs", "1", "--tp",
+                               "10", "--out", "{out}/s"],
+    # cases and wave inputs (issue 28)
+    "simulate-case-unknown": ["simulate", "--case", "nope", "--out", "{out}/h.nc"],
+    "simulate-case-broken-file": ["simulate", "--case", "case_unknown_key.toml", "--out",
+                                  "{out}/h.nc"],
+    "simulate-case-with-mass": ["simulate", "--case", "oc3_hywind", "--mass", "5", "--out",
+                                "{out}/h.nc"],
+    "simulate-mooring-unknown": ["simulate", "--case", "oc3_hywind", "--mooring", "elastic",
+                                 "--out", "{out}/h.nc"],
+    "simulate-mooring-without-case": ["simulate", "--coeffs", "good_coeffs.nc", "--mooring",
+                                      "table", "--out", "{out}/h.nc"],
+    "simulate-decay-nan": ["simulate", "--coeffs", "good_coeffs.nc", "--decay", "0.1,nan",
+                           "--out", "{out}/h.nc"],
+    "simulate-wave-elevation-not-eta": ["simulate", "--coeffs", "good_coeffs.nc",
+                                        "--wave-elevation", "good_force.csv", "--out",
+                                        "{out}/h.nc"],
+    "simulate-eta-without-record": ["simulate", "--coeffs", "good_coeffs.nc", "--eta", "F",
+                                    "--out", "{out}/h.nc"],
+    "bem-case-broken-file": ["bem", "--case", "case_unknown_key.toml", "--out", "{out}/c.nc"],
+    "import-eta-absent": ["import", "good_hist.csv", "--eta", "swell", "--out", "{out}/h.nc"],
     # hybrid
     "hybrid-hidden-abc": ["hybrid", "good_hist.nc", "good_hist2.nc", "--hidden", "abc", "--out",
                           "{out}/n"],

@@ -99,6 +99,8 @@ def _list(item: Callable[[str], Any]) -> Callable[[str], tuple]:
     return parse
 
 
+#: argparse type: comma-separated finite numbers, e.g. ``5,0,0.02``
+finite_floats = _list(finite_float)
 #: argparse type: comma-separated positive numbers, e.g. ``0.05,0.1``
 positive_floats = _list(positive_float)
 #: argparse type: comma-separated positive integers, e.g. ``32,32``
@@ -142,6 +144,34 @@ def add_out(p: argparse.ArgumentParser, help: str, *, required: bool = False,
             default: str | None = None, metavar: str = "PATH") -> None:
     """``--out PATH``: where the command writes its result (refused if it is an input)."""
     p.add_argument("--out", required=required, default=default, metavar=metavar, help=help)
+
+
+def add_case(p: argparse.ArgumentParser, help: str) -> None:
+    """``--case NAME|FILE``: a built-in case or a case TOML file (docs/CASES.md)."""
+    p.add_argument("--case", default=None, metavar="NAME|FILE",
+                   help=f"a built-in case (oc3_hywind, paper_sphere, kramer2021_decay) or a case "
+                        f"TOML file (docs/CASES.md): {help}")
+
+
+#: ``--mooring`` choices (hybridwsi.cases.schema.MOORING_MODELS)
+MOORING_MODELS = ("moordyn", "quasi-static", "table")
+
+
+def add_mooring(p: argparse.ArgumentParser) -> None:
+    """``--mooring MODEL``: the mooring model instead of the case's ``[forces] mooring``."""
+    p.add_argument("--mooring", choices=MOORING_MODELS, default=None,
+                   help="with --case: the mooring model instead of the case's: moordyn (line "
+                        "dynamics), quasi-static (MoorPy solved every step) or table (MoorPy's "
+                        "interpolant, the default of a case with [mooring])")
+
+
+def add_eta(p: argparse.ArgumentParser) -> None:
+    """``--eta COL``: the wave-elevation column/channel of a CSV or OpenFAST file."""
+    p.add_argument("--eta", metavar="COL", default=None,
+                   help="wave-elevation column [m, or the length unit of its header] of a "
+                        "CSV, or channel of an OpenFAST file (e.g. Wave1Elev); read as "
+                        "eta(time, probe). Default: a CSV column named eta; OpenFAST: every "
+                        "Wave<n>Elev")
 
 
 def add_json(p: argparse.ArgumentParser) -> None:

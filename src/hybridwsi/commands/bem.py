@@ -1,5 +1,5 @@
 """``hybridwsi bem``: Capytaine coefficients of a floating body (defaults: the paper's sphere;
-``--case NAME`` a built-in case such as ``oc3_hywind``)."""
+``--case NAME|FILE`` a built-in case such as ``oc3_hywind`` or a case TOML file)."""
 
 from __future__ import annotations
 
@@ -16,8 +16,9 @@ DESCRIPTION = (
     "Solve the radiation/diffraction problems of a floating body with Capytaine (symmetric mesh "
     "with lid where the body allows it, direct method) and write the coefficient NetCDF. "
     "Defaults reproduce the paper: a sphere R = 0.15 m, m = 7.06 kg, 6400 panels, 400 "
-    "frequencies 0.1-40 rad/s, deep water. --case NAME takes the body and the [bem] table of a "
-    "built-in case (e.g. oc3_hywind, paper_sphere); --body takes any other body (a JSON "
+    "frequencies 0.1-40 rad/s, deep water. --case NAME|FILE takes the body and the [bem] table "
+    "of a built-in case (e.g. oc3_hywind, paper_sphere) or of a case TOML file; --body takes "
+    "any other body (a JSON "
     "description, hybridwsi.bodies.body_from_dict). Results are cached (~/.cache/hybridwsi/bem "
     "or $HYBRIDWSI_CACHE/bem), shipped results are used when the inputs match, and an "
     "interrupted run resumes where it stopped."
@@ -33,9 +34,8 @@ PROBLEM_OPTIONS = ("body", *SPHERE_DEFAULTS, "panels", "panel_size", "dofs")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from hybridwsi.commands import _options as o
 
-    parser.add_argument("--case", default=None,
-                        help="built-in case (hybridwsi.cases): its body and [bem] table; not "
-                             "combined with the body, frequency and mesh options")
+    o.add_case(parser, "its body and [bem] table; not combined with the body, frequency and "
+                       "mesh options")
     parser.add_argument("--quick", action="store_true",
                         help="with --case: the coarse [bem_quick] table instead of [bem]")
     parser.add_argument("--body", default=None,
@@ -112,9 +112,10 @@ def read_body(spec: str):
 
 def problem(args: argparse.Namespace) -> dict:
     """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` from the options: a case's
-    (:func:`hybridwsi.cases.bem_arguments`) or the body/frequency options (paper defaults)."""
+    (:func:`hybridwsi.casemodel.bem_arguments`) or the body/frequency options (paper defaults)."""
     from hybridwsi.bodies import FloatingSphere
-    from hybridwsi.cases import bem_arguments, load_case
+    from hybridwsi.casemodel import bem_arguments
+    from hybridwsi.cases import load_case
     from hybridwsi.errors import InputError
 
     if args.case is not None:
@@ -123,7 +124,11 @@ def problem(args: argparse.Namespace) -> dict:
         if clash:
             raise InputError(f"--case takes the body and BEM set-up from the case file; do not "
                              f"combine it with {', '.join(clash)}")
-        return bem_arguments(load_case(args.case), "bem_quick" if args.quick else "bem")
+        case = load_case(args.case)
+        try:
+            return bem_arguments(case, "bem_quick" if args.quick else "bem")
+        except InputError as exc:
+            raise InputError(f"{case.label}: {exc}") from None
     if args.quick:
         raise InputError("--quick needs --case")
     opt = {k: SPHERE_DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)
@@ -147,7 +152,8 @@ def run(args: argparse.Namespace) -> int:
     from hybridwsi.hydro import bem
 
     body_file = args.body if args.body and Path(args.body).expanduser().exists() else None
-    check_output_path(args.out, [body_file])
+    case_file = args.case if args.case and Path(args.case).expanduser().is_file() else None
+    check_output_path(args.out, [body_file, case_file])
     if args.cache_dir is not None and not args.no_cache:
         check_output_path(args.cache_dir, kind="dir")
     check_panels(args.panels, args.workers)

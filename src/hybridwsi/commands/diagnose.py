@@ -55,6 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="force variable/column to regress [N or N m] (default F_tot)")
     o.add_format(parser)
     o.add_columns(parser)
+    o.add_eta(parser)
     o.add_dofs(parser, "the DOFs to diagnose (a CSV: the DOF names of its columns, default its "
                "'# dof:' line, else Heave; other files: a subset of theirs)")
     parser.add_argument("--known", action="append", default=[], metavar="NAME[=VALUE]",
@@ -127,7 +128,7 @@ def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[
         return select_dofs(example_history(), args.dofs), {"file": None, "example": EXAMPLE}
     if not args.file:
         raise InputError("no input: give a history FILE (CSV, NetCDF, ...) or --example")
-    mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot")}
+    mapping = {k: getattr(args, k) for k in ("time", "z", "zdot", "zddot", "eta")}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         hist = read_dofs(args.file, args.dofs, format=args.format, mass=args.mass,
@@ -204,19 +205,12 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
     if mass is None:
         notes.append("no mass given (--mass): stability assessment skipped")
         return None
-    try:
-        from hybridwsi.diagnostic.stability import assess
-    except ImportError:
-        notes.append("stability assessment is not available in this installation")
-        return None
+    from hybridwsi.diagnostic.stability import CoupledStep, assess
+
     m = np.asarray(mass, dtype=float)
-    reports = assess(result, float(m.ravel()[0]) if m.size == 1 else m, known,
-                     dt=args.target_dt)
-    if isinstance(reports, dict):
-        reports = list(reports.values())
-    elif not isinstance(reports, (list, tuple)):
-        reports = [reports]
-    return [r.to_dict() for r in reports]
+    step = CoupledStep.from_components(float(m.ravel()[0]) if m.size == 1 else m, known, result,
+                                       dt=args.target_dt, scheme="semi_implicit_euler")
+    return [s.to_dict() for s in assess(step).settings]
 
 
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:

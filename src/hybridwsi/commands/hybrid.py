@@ -28,6 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     o.add_coeffs(p, "default: from the sweep manifest (its file or its case), else the "
                       "paper sphere's")
     o.add_dofs(p, "the DOFs of the histories to use (default: all of them)")
+    o.add_eta(p)
     p.add_argument("--partition", default="recommended",
                    choices=["recommended", "added_mass_to_network"],
                    help="force partition whose residual the network learns (default recommended)")
@@ -84,7 +85,7 @@ def _open_sweep(path: Path):
                          f"{exc}") from None
 
 
-def _load(data: list[str], dofs: tuple[str, ...] | None):
+def _load(data: list[str], dofs: tuple[str, ...] | None, eta: str | None = None):
     from hybridwsi.commands._options import read_dofs
     from hybridwsi.history import select_dofs
     from hybridwsi.sweep import STORE, case_history
@@ -99,7 +100,10 @@ def _load(data: list[str], dofs: tuple[str, ...] | None):
             mf = (path if path.suffix != ".zarr" else path.parent) / "manifest.json"
             manifest = json.loads(mf.read_text()) if mf.is_file() else manifest
         else:
-            hists.append(read_dofs(str(path), dofs, format="netcdf"))
+            # histories are NetCDF; with --eta any format the importers read (a CSV or an
+            # OpenFAST record with its wave-elevation column)
+            hists.append(read_dofs(str(path), dofs, format="auto" if eta else "netcdf",
+                                   eta=eta))
     return hists, manifest
 
 
@@ -128,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     if max(args.hidden) > MAX_WIDTH:
         raise InputError(f"--hidden widths must be at most {MAX_WIDTH}, got "
                          f"{','.join(map(str, args.hidden))}")
-    hists, manifest = _load(args.data, args.dofs)
+    hists, manifest = _load(args.data, args.dofs, args.eta)
     hists = hists[: args.max_cases]
     if len(hists) < 2:
         raise InputError("need at least two histories (one to train, one held out)")

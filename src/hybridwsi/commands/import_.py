@@ -29,6 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
               metavar="HISTORY")
     o.add_format(parser)
     o.add_columns(parser)
+    o.add_eta(parser)
     parser.add_argument("--force-column", action="append", metavar="COL", dest="forces",
                         help="CSV force column [N or N m] to import (repeatable; default: every "
                         "other numeric column with a force unit or no unit)")
@@ -59,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_path(out, [args.file])
     options = {"time": args.time, "z": args.z, "zdot": args.zdot, "zddot": args.zddot,
                "forces": args.forces, "sep": args.sep, "drop_height": args.drop_height,
-               "mkbound": args.mkbound}
+               "mkbound": args.mkbound, "eta": args.eta}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         hist = read_dofs(args.file, args.dofs, format=args.format, mass=args.mass,
@@ -79,7 +80,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"{args.file} ({hist.attrs.get('format')}) -> {out}: {t.size} samples, "
           f"t = {t[0]:.6g}..{t[-1]:.6g} s, dt = {(t[-1] - t[0]) / (t.size - 1):.6g} s")
     print(f"  kinematics: {', '.join(kin) or 'none'}; forces: "
-          f"{', '.join(force_names(hist)) or 'none'}")
+          f"{', '.join(force_names(hist)) or 'none'}"
+          + (f"; wave elevation: {', '.join(map(str, hist['probe'].values))}"
+             if "eta" in hist else ""))
     for key in ("resampled", "missing"):
         if key in hist.attrs:
             print(f"  {key}: {hist.attrs[key]}")

@@ -10,10 +10,11 @@ DESCRIPTION = (
     "--workers processes by default, or --scheduler ADDRESS) and written atomically to "
     "OUT/parts/<case>.nc; then consolidated into OUT/sweep.zarr with a 'case' dimension, and "
     "OUT/manifest.json (inputs, versions, settings hash, per-case motion statistics). "
-    "Default: the paper sphere in heave. --case NAME (e.g. oc3_hywind) simulates a built-in "
-    "case: its coefficients, DOFs, force components (mooring, Morison drag, additional "
-    "damping, rotor) and the defaults of its [sweep] table. Re-run with --resume after an "
-    "interruption: finished cases are skipped."
+    "Default: the paper sphere in heave. --case NAME|FILE (a built-in case such as oc3_hywind, "
+    "or a case TOML file) simulates that case: its coefficients, DOFs, force components "
+    "(mooring, Morison drag, additional damping, rotor), each recorded in the parts, and the "
+    "defaults of its [sweep] table. Re-run with --resume after an interruption: finished "
+    "cases are skipped."
 )
 
 #: the sphere sweep's defaults (a case's [sweep] table replaces them)
@@ -31,10 +32,10 @@ def _scheduler(text: str) -> str:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from hybridwsi.commands import _options as o
 
-    p.add_argument("--case", default=None, metavar="NAME",
-                   help="built-in case (hybridwsi.cases, e.g. oc3_hywind): its body's "
-                        "coefficients ([bem] table, shipped), DOFs, force components and "
-                        "[sweep] defaults; default: the paper sphere in heave")
+    o.add_case(p, "its body's coefficients ([bem] table, shipped when the inputs match), "
+                  "DOFs, force components and [sweep] defaults; default: the paper sphere in "
+                  "heave")
+    o.add_mooring(p)
     p.add_argument("--hs", required=True, type=o.positive_floats, metavar="HS[,HS...]",
                    help="significant wave heights [m], comma-separated")
     p.add_argument("--tp", required=True, type=o.positive_floats, metavar="TP[,TP...]",
@@ -100,6 +101,7 @@ def config_from(args: argparse.Namespace):
     given = {"duration": args.duration, "dt": args.dt, "ramp": args.ramp, "dofs": args.dofs,
              "gamma": args.jonswap_gamma, "wave_components": args.wave_components,
              "wave_kinematics": args.wave_kinematics, "coeffs": args.coeffs, "mass": args.mass,
+             "mooring": args.mooring,
              "nonlinear_hydrostatics": args.nonlinear_hydrostatics or None}
     if args.case is not None:
         cfg = SweepConfig.for_case(args.case, **given)
@@ -122,9 +124,12 @@ def print_statistics(manifest: dict) -> None:
         print(f"motion statistics over {window[0]:g}-{window[1]:g} s (manifest.json):")
     for cid, row in rows[:PRINTED_CASES]:
         parts = [f"{d} std {v['std']:.4g} max|.| {max(abs(v['min']), abs(v['max'])):.4g} "
-                 f"{v['unit']}" for d, v in row.items() if d != "eta"]
+                 f"{v['unit']}" for d, v in row.items() if d != "eta" and not d.startswith("T_")]
         if "eta" in row:
             parts.append(f"4 std(eta) {row['eta']['hs_4std']:.3g} m")
+        if "T_fairlead" in row:
+            top = max(v["max"] for v in row["T_fairlead"].values())
+            parts.append(f"max fairlead tension {top / 1e3:.5g} kN")
         print(f"  {cid}: " + "; ".join(parts))
     if len(rows) > PRINTED_CASES:
         print(f"  ... and {len(rows) - PRINTED_CASES} more cases in manifest.json")

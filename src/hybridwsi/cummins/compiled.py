@@ -17,7 +17,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from hybridwsi.errors import SolverError
 from hybridwsi.forces._compiled import HAVE_NUMBA, CompiledForce, _kernel, numba, quiet
 
 
@@ -138,7 +137,7 @@ def available(forces: Sequence[CompiledForce | None]) -> bool:
 
 def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.ndarray,
             ss_a: np.ndarray, ss_b: np.ndarray, ss_c: np.ndarray, u_half: np.ndarray,
-            y0: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+            y0: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, str | None, int]:
     """Fixed-step RK4 of ``y = [z, ż, x_rad]`` with the components' kernels.
 
     Parameters
@@ -159,9 +158,14 @@ def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.nda
     Returns
     -------
     y : ndarray (nt, 2 n + r)
-        The state at the output times.
+        The state at the output times (NaN after a failure).
     f_comp : ndarray (nt, n)
         The components' summed force at the output times [N, N m].
+    message : str or None
+        Why the integration stopped early (a kernel's message, or the divergence), None when
+        it reached the end: failure is data here, as in every solver.
+    steps : int
+        Steps completed.
     """
     nt = (u_half.shape[0] + 1) // 2
     n = minv.shape[0]
@@ -177,9 +181,14 @@ def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.nda
                  tuple(f.idata for f in padded))
         mats = (c(minv), c(stiffness), c(ss_a), c(ss_b), c(ss_c))
         status, comp, step = _loop(comps, mats, c(u_half), float(dt), y, f_comp)
+    if status == 0:
+        return y, f_comp, None, nt - 1
     if status == -1:
-        raise SolverError(f"RK4 integration diverged at t = {step * dt + dt:.6g} s; reduce dt")
-    if status:
-        raise SolverError(forces[comp].messages.get(
-            status, f"force kernel {comp} failed with status {status}"))
-    return y, f_comp
+        message = f"RK4 integration diverged at t = {step * dt + dt:.6g} s; reduce dt"
+    else:
+        message = forces[comp].messages.get(status,
+                                             f"force kernel {comp} failed with status {status}")
+    diverged = status == -1  # the step's stages ran (y[step + 1] is the non-finite state)
+    y[step + 2 if diverged else step + 1:] = np.nan  # rows never written
+    f_comp[step + 1 if diverged else step:] = np.nan
+    return y, f_comp, message, step

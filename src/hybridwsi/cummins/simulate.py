@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg
 import xarray as xr
 
+from hybridwsi._meta import version as _version
 from hybridwsi.cummins.forcing import (
     as_wave,
     excitation,
@@ -29,7 +30,8 @@ from hybridwsi.cummins.forcing import (
     time_forcing,
     time_grid,
 )
-from hybridwsi.cummins.solvers import run_linear, run_stepping, solve_convolution
+from hybridwsi.cummins.result import SolverResult
+from hybridwsi.cummins.solvers import CumminsIntegrator, integrator_for
 from hybridwsi.cummins.system import CumminsSystem, build_system
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import ExactHydrostatic, KnownComponent, summed_linear_coefficients
@@ -64,28 +66,15 @@ def _vector(value: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-def simulate(
-    coeffs: xr.Dataset,
-    *,
-    mass: float | np.ndarray | None = None,
-    body: Any = None,
-    dofs: Sequence[str] = ("Heave",),
-    duration: float,
-    dt: float,
-    wave: Wave | Mapping | None = None,
-    z0: float | Sequence[float] = 0.0,
-    zdot0: float | Sequence[float] = 0.0,
-    forces: Sequence[KnownComponent] = (),
-    radiation: str = "statespace",
-    nonlinear_hydrostatics: bool = False,
-    ramp: float = 0.0,
-    irf: xr.DataArray | None = None,
-    radiation_ss: RadiationSS | None = None,
-    ss_order: int | None = None,
-    ss_tol: float = 0.005,
-    irf_t_max: float | None = None,
-    progress: bool = False,
-) -> xr.Dataset:
+def simulate(coeffs: xr.Dataset, *, mass: float | np.ndarray | None = None, body: Any = None,
+             dofs: Sequence[str] = ("Heave",), duration: float, dt: float,
+             wave: Wave | Mapping | None = None, z0: float | Sequence[float] = 0.0,
+             zdot0: float | Sequence[float] = 0.0, forces: Sequence[KnownComponent] = (),
+             radiation: str = "statespace", nonlinear_hydrostatics: bool = False,
+             ramp: float = 0.0, irf: xr.DataArray | None = None,
+             radiation_ss: RadiationSS | None = None, ss_order: int | None = None,
+             ss_tol: float = 0.005, irf_t_max: float | None = None, progress: bool = False
+             ) -> xr.Dataset:
     """Integrate the Cummins equation and return a TimeHistory.
 
     Parameters
@@ -121,15 +110,10 @@ def simulate(
         the DOFs the body can do exactly, linear ``−C z`` on the others (RK4 solver).
     ramp : float
         Duration [s] of the half-cosine ramp on the wave excitation.
-    irf : xarray.DataArray, optional
-        Precomputed kernel K(time, radiating_dof, influenced_dof); default from ``coeffs``.
-    radiation_ss : RadiationSS, optional
-        Precomputed state-space model (skips the fit).
-    ss_order, ss_tol : int, float
-        Passed to :func:`~hybridwsi.hydro.statespace.fit_radiation_ss` (default tolerance
-        0.5 %: a higher order costs almost nothing here and keeps the RAO error < 0.5 %).
-    irf_t_max : float, optional
-        Kernel length [s] passed to ``radiation_irf``.
+    irf, radiation_ss, ss_order, ss_tol, irf_t_max
+        Precomputed kernel K [N/m/s per DOF pair] or state-space model, and the fit's options
+        (:func:`~hybridwsi.cummins.system.build_system`; default tolerance 0.5 %: a higher
+        order costs almost nothing here and keeps the RAO error < 0.5 %).
     progress : bool
         Show a tqdm progress bar for the stepping solvers.
 
@@ -141,46 +125,63 @@ def simulate(
     t = time_grid(duration, dt)
     wave = as_wave(wave)
     timed, stateful = split_components(forces)
-    stepping = nonlinear_hydrostatics or bool(stateful)
-    if stepping and radiation == "convolution":
-        raise InputError("nonlinear_hydrostatics and state-dependent forces are implemented "
-                         "with radiation='statespace' or 'none' only")
+    integ = integrator_for(radiation, state_forces=nonlinear_hydrostatics or bool(stateful))
     if nonlinear_hydrostatics and body is None:
         raise InputError("nonlinear_hydrostatics needs body= (a body with restoring_force(q, "
                          "dofs), or buoyancy_force(z), e.g. hybridwsi.bodies.FloatingSphere)")
     sys = build_system(coeffs, dofs=dofs, mass=mass, radiation=radiation, dt=dt, irf=irf,
                        radiation_ss=radiation_ss, ss_order=ss_order, ss_tol=ss_tol,
                        irf_t_max=irf_t_max)
-    n = sys.n
-    z0v, v0v = _vector(z0, n, "z0"), _vector(zdot0, n, "zdot0")
+    z0v, v0v = _vector(z0, sys.n, "z0"), _vector(zdot0, sys.n, "zdot0")
     f_exc, eta = excitation(wave, coeffs, t, sys.dofs, ramp)
-    f_ext = time_forcing(timed, t, n)
-    extra_mass = None
-    if stepping:
-        hs = ExactHydrostatic(body, sys.dofs, sys.stiffness) if nonlinear_hydrostatics else None
-        if stateful:
-            extra_mass = summed_linear_coefficients(stateful, n)[0]
-        meff = sys.mass + sys.added_mass_inf
-        if extra_mass is not None and np.any(extra_mass):
-            meff = meff + extra_mass
-        t_half = np.arange(2 * t.size - 1) * (dt / 2)
-        u_half = excitation(wave, coeffs, t_half, sys.dofs, ramp)[0]
-        u_half += time_forcing(timed, t_half, n)
-        z, v, mem, f_hs, f_state = run_stepping(
-            sys, None if hs is None else hs.restoring, stateful, u_half, t, dt, z0v, v0v,
-            progress, meff)
-        f_ext = f_ext + f_state
-    elif radiation == "convolution":
-        z, v, _, mem = solve_convolution(sys, f_exc + f_ext, z0v, v0v, dt, progress)
-        f_hs = -z @ sys.stiffness.T
-    else:
-        z, v, mem = run_linear(sys, (f_exc + f_ext)[:, :, None], z0v[:, None], v0v[:, None], dt)
-        z, v, mem = z[..., 0], v[..., 0], mem[..., 0]
-        f_hs = -z @ sys.stiffness.T
+    f_ext = time_forcing(timed, t, sys.n)
+    options, extra_mass = _state_options(integ, sys, body if nonlinear_hydrostatics else None,
+                                         stateful)
+    u = _solver_forcing(integ, wave, coeffs, timed, t, sys, ramp, f_exc, f_ext)
+    sol = integ.solve(sys, u, z0v, v0v, dt, progress=progress, **options).raise_on_failure()
+    if "F_components" in sol.forces:  # the state-dependent components' force
+        f_ext = f_ext + sol.forces["F_components"]
     inputs = _inputs(coeffs, sys, duration=duration, dt=dt, wave=wave, z0=z0v, zdot0=v0v,
                      forces=[c.describe() for c in (*timed, *stateful)], radiation=radiation,
                      ramp=ramp, nonlinear_hydrostatics=nonlinear_hydrostatics, body=body)
-    return _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs, extra_mass)
+    return _history(sys, t, sol.z, sol.v, _restoring_force(sys, sol), sol.forces["F_rad_mem"],
+                    f_exc, f_ext, eta, inputs, extra_mass)
+
+
+def _state_options(integ: CumminsIntegrator, sys: CumminsSystem, body: Any,
+                   stateful: Sequence[KnownComponent]
+                   ) -> tuple[dict[str, Any], np.ndarray | None]:
+    """Options of an integrator that takes state-dependent forces (``restoring``: the exact
+    hydrostatic force of ``body`` when given, ``components``, ``meff``) and the components'
+    acceleration coefficient (their ``ode_force`` leaves out ``−A_k z̈``), or ``({}, None)``."""
+    if not integ.state_forces:
+        return {}, None
+    hs = ExactHydrostatic(body, sys.dofs, sys.stiffness) if body is not None else None
+    extra_mass = summed_linear_coefficients(stateful, sys.n)[0] if stateful else None
+    meff = sys.mass + sys.added_mass_inf
+    if extra_mass is not None and np.any(extra_mass):
+        meff = meff + extra_mass
+    return {"restoring": None if hs is None else hs.restoring, "components": stateful,
+            "meff": meff}, extra_mass
+
+
+def _solver_forcing(integ: CumminsIntegrator, wave: Wave | None, coeffs: xr.Dataset,
+                    timed: Sequence[KnownComponent], t: np.ndarray, sys: CumminsSystem,
+                    ramp: float, f_exc: np.ndarray, f_ext: np.ndarray) -> np.ndarray:
+    """The time-only force [N, N m] on the integrator's grid: the output grid (``f_exc +
+    f_ext``), or the steps and their midpoints for RK4's stages (evaluated there)."""
+    if not integ.half_steps:
+        return f_exc + f_ext
+    t_half = np.arange(2 * t.size - 1) * ((t[1] - t[0]) / 2)  # t[1] − t[0] is dt exactly
+    u = excitation(wave, coeffs, t_half, sys.dofs, ramp)[0]
+    u += time_forcing(timed, t_half, sys.n)
+    return u
+
+
+def _restoring_force(sys: CumminsSystem, sol: SolverResult) -> np.ndarray:
+    """F_hs [N, N m]: the integrator's when it evaluated one, else the linear ``−C z``."""
+    f_hs = sol.forces.get("F_hs")
+    return -sol.z @ sys.stiffness.T if f_hs is None else f_hs
 
 
 def _inputs(coeffs: xr.Dataset, sys: CumminsSystem, **kw: Any) -> dict[str, Any]:
@@ -339,8 +340,7 @@ def simulate_batch(
         ``(case, time)`` when any case has waves; the matrices ``mass``, ``added_mass_inf``,
         ``hydrostatic_stiffness`` ``(dof, dof_j)``; attrs as a TimeHistory.
     """
-    if radiation not in ("statespace", "none"):
-        raise InputError("simulate_batch supports radiation='statespace' or 'none'")
+    integ = integrator_for(radiation, batched=True)
     if isinstance(cases, xr.Dataset):
         cases = _cases_from_dataset(cases)
     cases = list(cases)
@@ -350,52 +350,58 @@ def simulate_batch(
     sys = build_system(coeffs, dofs=dofs, mass=mass, radiation=radiation, dt=dt, irf=irf,
                        radiation_ss=radiation_ss, ss_order=ss_order, ss_tol=ss_tol,
                        irf_t_max=irf_t_max)
-    n, nc = sys.n, len(cases)
-    z0, v0 = np.zeros((n, nc)), np.zeros((n, nc))
-    f_exc, f_ext = np.zeros((t.size, n, nc)), np.zeros((t.size, n, nc))
-    eta = np.zeros((t.size, nc))
-    waves: list[Any] = []
-    described: list[list[str]] = []
-    for c, case in enumerate(cases):
-        unknown = set(case) - _CASE_KEYS
-        if unknown:
-            raise InputError(f"case {c}: unknown keys {sorted(unknown)} (use {sorted(_CASE_KEYS)})")
-        z0[:, c] = _vector(case.get("z0", 0.0), n, f"case {c} z0")
-        v0[:, c] = _vector(case.get("zdot0", 0.0), n, f"case {c} zdot0")
-        wave = as_wave(case.get("wave"))
-        waves.append(None if wave is None else wave.to_dict())
-        if wave is not None:
-            f_exc[:, :, c], eta[:, c] = excitation(wave, coeffs, t, sys.dofs, ramp)
-        timed, stateful = split_components(case.get("forces"))
-        if stateful:
-            raise InputError(f"case {c}: simulate_batch is linear; state-dependent forces "
-                             f"({', '.join(s.describe() for s in stateful)}) need simulate()")
-        f_ext[:, :, c] = time_forcing(timed, t, n)
-        described.append([s.describe() for s in timed])
-    z, v, mem = run_linear(sys, f_exc + f_ext, z0, v0, dt)
-    move = (lambda a: np.moveaxis(a, 2, 0))  # (time, dof, case) -> (case, time, dof)
-    z, v, mem, f_exc, f_ext = map(move, (z, v, mem, f_exc, f_ext))
+    z0, v0, f_exc, f_ext, eta, described = _batch_inputs(coeffs, cases, sys, t, ramp)
+    sol = integ.solve(sys, f_exc + f_ext, z0, v0, dt).raise_on_failure()
+    z, v, mem = sol.z, sol.v, sol.forces["F_rad_mem"]
     forces = _forces(sys, z, v, -z @ sys.stiffness.T, mem, f_exc, f_ext)
     acc = forces.pop("zddot")
-    inputs = _inputs(coeffs, sys, duration=duration, dt=dt, wave=None, z0=z0, zdot0=v0,
+    inputs = _inputs(coeffs, sys, duration=duration, dt=dt, wave=None, z0=z0.T, zdot0=v0.T,
                      forces=[], radiation=radiation, ramp=ramp,
                      nonlinear_hydrostatics=False, body=None)
-    inputs["cases"] = [{"z0": z0[:, c].tolist(), "zdot0": v0[:, c].tolist(), "wave": waves[c],
-                        "forces": described[c]} for c in range(nc)]
+    inputs["cases"] = [{"z0": z0[c].tolist(), "zdot0": v0[c].tolist(), **described[c]}
+                       for c in range(len(cases))]
     dims = ("case", "time", "dof")
     data = {"z": (dims, z), "zdot": (dims, v), "zddot": (dims, acc)}
     data.update({k: (dims, forces[k], {"role": "force"}) for k in FORCES})
     data.update(_matrix_vars(sys))
-    if any(w is not None for w in waves):
-        data["eta"] = (("case", "time"), eta.T, {"units": "m"})
-    from hybridwsi._meta import version as _version
-
+    if any(d["wave"] is not None for d in described):
+        data["eta"] = (("case", "time"), eta, {"units": "m"})
     out = xr.Dataset(
         data,
-        coords={"case": np.arange(nc), "time": ("time", t, {"units": "s"}), "dof": sys.dofs,
-                "dof_j": sys.dofs},
+        coords={"case": np.arange(len(cases)), "time": ("time", t, {"units": "s"}),
+                "dof": sys.dofs, "dof_j": sys.dofs},
         attrs={"hybridwsi_version": _version(), "source": "cummins.simulate_batch",
                "inputs": json.dumps(inputs, default=str, sort_keys=True)},
     )
     _set_dof_units(out, sys.dofs)
     return out
+
+
+def _batch_inputs(coeffs: xr.Dataset, cases: list[Mapping[str, Any]], sys: CumminsSystem,
+                  t: np.ndarray, ramp: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                             list[dict[str, Any]]]:
+    """Initial states (n_case, n), excitation and time-only forces (n_case, nt, n) [N, N m],
+    η (n_case, nt) [m] and each case's description (wave dict, force names)."""
+    n, nc = sys.n, len(cases)
+    z0, v0 = np.zeros((nc, n)), np.zeros((nc, n))
+    f_exc, f_ext = np.zeros((nc, t.size, n)), np.zeros((nc, t.size, n))
+    eta = np.zeros((nc, t.size))
+    described: list[dict[str, Any]] = []
+    for c, case in enumerate(cases):
+        unknown = set(case) - _CASE_KEYS
+        if unknown:
+            raise InputError(f"case {c}: unknown keys {sorted(unknown)} (use {sorted(_CASE_KEYS)})")
+        z0[c] = _vector(case.get("z0", 0.0), n, f"case {c} z0")
+        v0[c] = _vector(case.get("zdot0", 0.0), n, f"case {c} zdot0")
+        wave = as_wave(case.get("wave"))
+        if wave is not None:
+            f_exc[c], eta[c] = excitation(wave, coeffs, t, sys.dofs, ramp)
+        timed, stateful = split_components(case.get("forces"))
+        if stateful:
+            raise InputError(f"case {c}: simulate_batch is linear; state-dependent forces "
+                             f"({', '.join(s.describe() for s in stateful)}) need simulate()")
+        f_ext[c] = time_forcing(timed, t, n)
+        described.append({"wave": None if wave is None else wave.to_dict(),
+                          "forces": [s.describe() for s in timed]})
+    return z0, v0, f_exc, f_ext, eta, described

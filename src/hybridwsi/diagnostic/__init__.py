@@ -2,10 +2,10 @@
 
 - :func:`regress` — force sensitivities α, β, γ of the black-box force, with HAC uncertainty and
   identifiability (:mod:`~hybridwsi.diagnostic.regression`);
-- :func:`prescribed_force_stability`, :func:`surrogate_stability`,
-  :func:`loosely_coupled_stability`, :func:`max_stable_dt`, :func:`assess` — the three stability
-  settings (:mod:`~hybridwsi.diagnostic.stability`), with the shared step function
-  :func:`lagged_step` (:mod:`~hybridwsi.diagnostic.integrators`);
+- :class:`CoupledStep` (the matrices and Δt of a coupled step), :func:`assess` (the one
+  stability assessment, three settings) → :class:`StabilityReport`, :func:`max_stable_dt`
+  (:mod:`~hybridwsi.diagnostic.stability`), with the shared step function :func:`lagged_step`
+  (:mod:`~hybridwsi.diagnostic.integrators`);
 - :func:`reconstruct` — paper Eq. 4 integration (:mod:`~hybridwsi.diagnostic.reconstruct`);
 - known components in :mod:`~hybridwsi.forces`.
 """
@@ -23,13 +23,13 @@ from hybridwsi.diagnostic.integrators import SCHEMES, lagged_step
 from hybridwsi.diagnostic.reconstruct import ReconstructionResult, reconstruct
 from hybridwsi.diagnostic.regression import RegressionResult, frequency_domain_split, regress
 from hybridwsi.diagnostic.stability import (
+    CoupledStep,
+    SettingVerdict,
     StabilityReport,
+    added_mass_ratio,
     amplification_matrix,
     assess,
-    loosely_coupled_stability,
     max_stable_dt,
-    prescribed_force_stability,
-    surrogate_stability,
 )
 
 __all__ = [
@@ -38,6 +38,6 @@ __all__ = [
     "SCHEMES", "lagged_step",
     "ReconstructionResult", "reconstruct",
     "RegressionResult", "frequency_domain_split", "regress",
-    "StabilityReport", "amplification_matrix", "assess", "loosely_coupled_stability",
-    "max_stable_dt", "prescribed_force_stability", "surrogate_stability",
+    "CoupledStep", "SettingVerdict", "StabilityReport", "added_mass_ratio",
+    "amplification_matrix", "assess", "max_stable_dt",
 ]

@@ -42,14 +42,16 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from hybridwsi.errors import HybridWSIError, InputError
+from hybridwsi.diagnostic.reconstruct import reconstruct
+from hybridwsi.diagnostic.regression import regress
+from hybridwsi.diagnostic.stability import CoupledStep, assess
+from hybridwsi.errors import InputError
 from hybridwsi.forces import (
     KnownComponent,
     LinearDamping,
     QuadraticDamping,
     RadiationMemory,
     as_matrix,
-    summed_linear_coefficients,
 )
 from hybridwsi.forces.external import PrescribedForce
 from hybridwsi.forces.linear import has_known, known_from, mass_from
@@ -139,35 +141,30 @@ def enumerate_partitions(names: Sequence[str]) -> list[tuple[str, ...]]:
 
 
 def _verdicts(m, known, reg, dt, scheme) -> dict[str, Any]:
-    from hybridwsi.diagnostic import stability
-
-    n = m.shape[0]
-    a_k, b_k, c_k = summed_linear_coefficients(known, n)
-    rep_a = stability.prescribed_force_stability(m, a_k, b_k, c_k)
-    rep_b = stability.surrogate_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta, reg.gamma)
-    rep_c = stability.loosely_coupled_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta,
-                                                reg.gamma, dt, scheme)
+    """The partition's stability (:func:`~hybridwsi.diagnostic.stability.assess`) as table
+    columns; feasible: stable in the continuous loop and strictly stable lagged at ``dt``."""
+    rep = assess(CoupledStep.from_components(m, known, reg, dt=dt, scheme=scheme))
     return {
-        "prescribed_verdict": rep_a.verdict,
-        "surrogate_verdict": rep_b.verdict,
-        "loosely_coupled_verdict": rep_c.verdict,
-        "spectral_radius": rep_c.spectral_radius,
-        "max_stable_dt": rep_c.max_stable_dt,
-        "added_mass_ratio": rep_c.conditions.get("added_mass_ratio"),
-        "feasible": bool(rep_b.stable and rep_c.verdict == "stable"),
+        "prescribed_verdict": rep.prescribed.verdict,
+        "surrogate_verdict": rep.continuous.verdict,
+        "loosely_coupled_verdict": rep.loosely_coupled.verdict,
+        "spectral_radius": rep.spectral_radius,
+        "max_stable_dt": rep.max_stable_dt,
+        "added_mass_ratio": rep.added_mass_ratio,
+        "feasible": bool(rep.continuous_stable and rep.loosely_coupled.verdict == "stable"),
     }
 
 
 def _reconstruction_error(hist, known, m) -> float:
-    from hybridwsi.diagnostic.reconstruct import reconstruct
-
+    """Largest normalised RMS error of the reconstruction; inf when it fails (its result
+    says so) or when this partition's ODE cannot be set up (singular m + A_k)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = reconstruct(hist, "F_tot", known, mass=m)
-        return float(np.max(res.metrics["nrms_error"]))
-    except HybridWSIError:  # a diverging reconstruction is a result, not a crash
+    except InputError:
         return float("inf")
+    return float(np.max(res.metrics["nrms_error"])) if res.success else float("inf")
 
 
 def select_partition(
@@ -219,8 +216,6 @@ def select_partition(
         ``condition_number``, ``identifiable``, verdicts of (a)-(c), ``spectral_radius``,
         ``max_stable_dt``, ``added_mass_ratio``, ``recon_nrms``, ``feasible``, ``score``.
     """
-    from hybridwsi.diagnostic.regression import regress
-
     validate(hist)
     n = hist.sizes["dof"]
     m = mass if mass is not None else mass_from(hist, coeffs)
@@ -232,35 +227,42 @@ def select_partition(
         raise InputError(f"dt must be positive, got {dt}")
     avail = available_candidates(hist, coeffs, quadratic_drag=quadratic_drag)
     built = build_candidates(hist, coeffs, candidates, quadratic_drag=quadratic_drag)
-    names = list(built)
-    rows = []
-    for combo in enumerate_partitions(names):
-        known = [built[c] for c in combo]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            reg = regress(hist, force=force, known=known, force_accuracy=force_accuracy)
-        row: dict[str, Any] = {
-            "partition": "+".join(combo) or "(none)",
-            "known": list(combo),
-            "alpha": _squeeze(reg.alpha), "beta": _squeeze(reg.beta), "gamma": _squeeze(reg.gamma),
-            "condition_number": float(reg.condition_number),
-            "identifiable": bool(reg.identifiable),
-        }
-        row.update(_verdicts(m, known, reg, dt, scheme))
-        row["recon_nrms"] = _reconstruction_error(hist, known, m) if reconstruct_each else np.nan
-        n_unknown = len([c for c in CANDIDATES if c in avail and c not in combo
-                         and not (c == "linear_damping" and "radiation_memory" in combo)
-                         and not (c == "radiation_memory" and "linear_damping" in combo)])
-        recon = row["recon_nrms"] if np.isfinite(row["recon_nrms"]) else 1e3
-        row["score"] = float(row["spectral_radius"] + (0 if np.isnan(recon) else recon)
-                             + UNKNOWN_WEIGHT * n_unknown)
-        rows.append(row)
+    rows = [_partition_row(hist, combo, [built[c] for c in combo], avail, m, dt, force=force,
+                           scheme=scheme, reconstruct_each=reconstruct_each,
+                           force_accuracy=force_accuracy)
+            for combo in enumerate_partitions(list(built))]
     table = pd.DataFrame(rows)
     table = table.sort_values(["feasible", "score"], ascending=[False, True], kind="stable")
     table.insert(0, "rank", np.arange(1, len(table) + 1))
     table.attrs = {"dt": dt, "scheme": scheme, "mass": m.tolist(),
                    "score": "spectral_radius + recon_nrms + 0.1 * n_unknown (feasible first)"}
     return table.reset_index(drop=True)
+
+
+def _partition_row(hist: xr.Dataset, combo: tuple[str, ...], known: list[KnownComponent],
+                   avail: list[str], m: np.ndarray, dt: float, *, force: str, scheme: str,
+                   reconstruct_each: bool, force_accuracy: float) -> dict[str, Any]:
+    """One row of the ranking: the residual's regression, its stability, the reconstruction
+    error and the score (module doc)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = regress(hist, force=force, known=known, force_accuracy=force_accuracy)
+    row: dict[str, Any] = {
+        "partition": "+".join(combo) or "(none)",
+        "known": list(combo),
+        "alpha": _squeeze(reg.alpha), "beta": _squeeze(reg.beta), "gamma": _squeeze(reg.gamma),
+        "condition_number": float(reg.condition_number),
+        "identifiable": bool(reg.identifiable),
+    }
+    row.update(_verdicts(m, known, reg, dt, scheme))
+    row["recon_nrms"] = _reconstruction_error(hist, known, m) if reconstruct_each else np.nan
+    n_unknown = len([c for c in CANDIDATES if c in avail and c not in combo
+                     and not (c == "linear_damping" and "radiation_memory" in combo)
+                     and not (c == "radiation_memory" and "linear_damping" in combo)])
+    recon = row["recon_nrms"] if np.isfinite(row["recon_nrms"]) else 1e3
+    row["score"] = float(row["spectral_radius"] + (0 if np.isnan(recon) else recon)
+                         + UNKNOWN_WEIGHT * n_unknown)
+    return row
 
 
 def _squeeze(a: np.ndarray) -> float | list:

@@ -17,6 +17,7 @@ with the step capped at the sampling interval (so no force sample is stepped ove
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -34,8 +35,9 @@ from hybridwsi.forces import (
 )
 from hybridwsi.forces.linear import mass_from
 from hybridwsi.diagnostic.regression import RegressionResult, as_components, kinematics
-from hybridwsi.diagnostic.stability import StabilityReport, prescribed_force_stability
-from hybridwsi.errors import InputError, SolverError
+from hybridwsi.cummins.result import SolverResult, failure, first_non_finite
+from hybridwsi.diagnostic.stability import CoupledStep, StabilityReport, assess
+from hybridwsi.errors import InputError
 from hybridwsi.history import make_history, time_step, validate
 
 
@@ -45,37 +47,41 @@ class ReconstructionResult:
 
     Attributes
     ----------
-    history : xarray.Dataset
+    history : xarray.Dataset or None
         TimeHistory (source ``"reconstruction"``) with z, ż, z̈ and the prescribed force
-        ``F_prescribed`` [N].
-    error : ndarray, shape (n_time, n_dof)
-        ``z − z_ref`` [m].
+        ``F_prescribed`` [N]; None when the integration failed.
+    error : ndarray, shape (n_time, n_dof), or None
+        ``z − z_ref`` [m] (None when the integration failed).
     metrics : dict
         Per DOF: ``rms_error`` [m], ``max_error`` [m], ``nrms_error`` (RMS error / std of z_ref),
-        ``final_drift`` [m] (error at the last sample).
+        ``final_drift`` [m] (error at the last sample); inf when the integration failed.
     stability : StabilityReport
-        Setting (a) for the ODE actually integrated (known part plus moved terms).
-    solver_message : str
-        ``solve_ivp``'s message.
-    n_rhs_evals : int
-        Right-hand-side evaluations.
+        The ODE actually integrated (known part plus moved terms, the rest prescribed):
+        its setting (a), ``stability.prescribed``, is the reconstruction's error dynamics.
+    solution : SolverResult
+        The integrator's result: ``success``, ``message``, ``nfev`` (right-hand-side
+        evaluations), the solution (:mod:`hybridwsi.cummins.result`).
     """
 
-    history: xr.Dataset
-    error: np.ndarray
+    history: xr.Dataset | None
+    error: np.ndarray | None
     metrics: dict[str, list[float]]
     stability: StabilityReport
-    solver_message: str
-    n_rhs_evals: int
+    solution: SolverResult
     inputs: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        """The reconstruction reached the end of the reference."""
+        return self.solution.success
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (metrics, stability, solver info; not the time series)."""
         return {
             "metrics": self.metrics,
-            "stability": self.stability.to_dict(),
-            "solver_message": self.solver_message,
-            "n_rhs_evals": self.n_rhs_evals,
+            "stability": self.stability.prescribed.to_dict(),
+            "solver_message": self.solution.message,
+            "n_rhs_evals": self.solution.nfev,
             "inputs": self.inputs,
         }
 
@@ -171,99 +177,166 @@ def reconstruct(
     Returns
     -------
     ReconstructionResult
+        A failed integration (``solve_ivp`` gave up, the state became non-finite) is returned
+        with ``success`` False and the reason in ``solution.message``, not raised.
 
     Raises
     ------
     InputError
-        Missing mass or kinematics, mismatched DOF, singular ``m + A_k − α``.
-    SolverError
-        When ``solve_ivp`` fails (its message is included).
+        Missing mass or kinematics, mismatched DOF, singular ``m + A_k − α``, a component
+        stepped by fixed-step integrators (``begin_step``).
     """
     validate(hist)
     given = as_components(known)
     # a force of time only (e.g. the excitation) is the same inside or outside the prescribed
     # force: it stays in F_p instead of being subtracted and integrated back
     comps = [c for c in given if not c.time_only]
+    stepped = [c.describe() for c in comps if c.stepped]
+    if stepped:
+        raise InputError(f"the reconstruction's adaptive integrator cannot step "
+                         f"{', '.join(stepped)} (begin_step): use its linearisation as known")
+    m = _mass(hist, mass)
+    alpha, beta, gamma = _moved_terms(move_identified, hist.sizes["dof"])
+    f_p = _prescribed_force(hist, force, comps, move_identified, (alpha, beta, gamma))
+    ode = PrescribedODE(m, comps, alpha, beta, gamma)
     t = np.asarray(hist["time"].values, dtype=float)
-    n_dof = hist.sizes["dof"]
-    m = mass_from(hist, None) if mass is None else as_matrix(mass, n_dof, "mass")
-    if m is None:
-        raise InputError("no mass given: pass mass=... or store 'mass' in the history")
-    if not np.all(np.isfinite(m)):
-        raise InputError("mass must be finite")
-    alpha, beta, gamma = _moved_terms(move_identified, n_dof)
-    moving = move_identified is not None
     z_ref, zd_ref = kinematics(hist, ("z", "zdot"))
-    f_p = black_box_force(hist, force, comps)
-    if moving:
-        (zdd_ref,) = kinematics(hist, ("zddot",))
-        # F_bb − (F̄ + α z̈ + β ż + γ z) + F̄: the mean stays prescribed
-        f_p = f_p - zdd_ref @ alpha.T - zd_ref @ beta.T - z_ref @ gamma.T
-
-    a_k, b_k, c_k = summed_linear_coefficients(comps, n_dof)
-    m_eff = m + a_k - alpha
-    sv = np.linalg.svd(m_eff, compute_uv=False)
-    if sv[-1] <= 1e-8 * np.linalg.norm(m + a_k, 2):
-        raise InputError(
-            "m + A_k − α is singular: the moved α cancels the inertia (α ≈ m + A_k, as when "
-            "F_bb is the whole equation of motion); move terms identified on a force component"
-        )
-    m_inv = np.linalg.inv(m_eff)
-    stab = prescribed_force_stability(m, a_k - alpha, b_k - beta, c_k - gamma)
-
-    spline = _UniformSpline(t, f_p)
-    # memoryless components with the default (linear) ode_force are folded into two matrices
-    # once, instead of being rebuilt at every right-hand-side call (identical result)
-    linear = [c for c in comps if _is_plain_linear(c)]
-    other = [c for c in comps if not _is_plain_linear(c)]
-    _, b_lin, c_lin = summed_linear_coefficients(linear, n_dof)
-    b_ode, c_ode = beta - b_lin, gamma - c_lin
-    n_states = [c.n_states for c in other]
-    offsets = np.cumsum([2 * n_dof, *n_states])
-    y0 = np.concatenate([z_ref[0], zd_ref[0], *[c.initial_state(hist) for c in other]])
-
-    def accel_and_states(ti: float, y: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
-        z, zd = y[:n_dof], y[n_dof : 2 * n_dof]
-        f = spline(ti) + b_ode @ zd + c_ode @ z
-        dx = []
-        for c, lo, hi in zip(other, offsets[:-1], offsets[1:]):
-            x = y[lo:hi]
-            f = f + c.ode_force(ti, z, zd, x)
-            if c.n_states:
-                dx.append(c.state_derivative(ti, z, zd, x))
-        return m_inv @ f, dx
-
-    def rhs(ti: float, y: np.ndarray) -> np.ndarray:
-        acc, dx = accel_and_states(ti, y)
-        return np.concatenate([y[n_dof : 2 * n_dof], acc, *dx])
-
     step = time_step(hist) if max_step is None else float(max_step)
-    sol = scipy.integrate.solve_ivp(
-        rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, max_step=step
+    sol = solve_prescribed(ode, f_p, z_ref[0], zd_ref[0], step, t=t, method=method, rtol=rtol,
+                           atol=atol, x0=ode.initial_states(hist))
+    inputs = _inputs(hist, force, given, None if move_identified is None else
+                     (alpha, beta, gamma), method=method, rtol=rtol, atol=atol, max_step=step)
+    stab = assess(CoupledStep(m, ode.a_k - alpha, ode.b_k - beta, ode.c_k - gamma))
+    if not sol.success:
+        inf = [math.inf] * z_ref.shape[1]
+        metrics = {"rms_error": inf, "max_error": inf, "nrms_error": inf, "final_drift": inf}
+        return ReconstructionResult(None, None, metrics, stab, sol, inputs)
+    err = sol.z - z_ref
+    out = make_history(
+        t, sol.z, sol.v, sol.a, forces={"F_prescribed": f_p},
+        dof=[str(d) for d in hist["dof"].values], mass=m, source="reconstruction",
+        inputs=inputs,
     )
-    if not sol.success or sol.y.shape[1] != t.size:
-        raise SolverError(f"reconstruction failed: {sol.message}")
-    if not np.all(np.isfinite(sol.y)):
-        i = int(np.flatnonzero(~np.isfinite(sol.y).all(axis=0))[0])
-        raise SolverError(f"reconstruction diverged (non-finite state) at t = {t[i]:.6g} s")
-    z, zd = sol.y[:n_dof].T, sol.y[n_dof : 2 * n_dof].T
-    zdd = np.array([accel_and_states(ti, yi)[0] for ti, yi in zip(t, sol.y.T)])
-    err = z - z_ref
-    inputs = {
+    return ReconstructionResult(out, err, _error_metrics(err, z_ref), stab, sol, inputs)
+
+
+def _inputs(hist: xr.Dataset, force: str, given: list[KnownComponent],
+            moved: tuple[np.ndarray, np.ndarray, np.ndarray] | None, **solver: Any
+            ) -> dict[str, Any]:
+    """The reconstruction's inputs as recorded in its history (and the reference's)."""
+    return {
         "force": force,
         "known": [c.describe() for c in given],
-        "moved_identified": None if not moving else {
-            "alpha": alpha.tolist(), "beta": beta.tolist(), "gamma": gamma.tolist()},
-        "method": method, "rtol": rtol, "atol": atol, "max_step": step,
+        "moved_identified": None if moved is None else {
+            k: v.tolist() for k, v in zip(("alpha", "beta", "gamma"), moved)},
+        **solver,
         "interpolation": "cubic spline (not-a-knot)",
         "reference": {"source": hist.attrs.get("source", ""),
                       "inputs": hist.attrs.get("inputs", "{}")},
     }
-    out = make_history(
-        t, z, zd, zdd, forces={"F_prescribed": f_p}, dof=[str(d) for d in hist["dof"].values],
-        mass=m, source="reconstruction", inputs=inputs,
-    )
-    return ReconstructionResult(
-        history=out, error=err, metrics=_error_metrics(err, z_ref), stability=stab,
-        solver_message=str(sol.message), n_rhs_evals=int(sol.nfev), inputs=inputs,
-    )
+
+
+def _mass(hist: xr.Dataset, mass: float | np.ndarray | None) -> np.ndarray:
+    """The rigid-body mass matrix [kg, kg m, kg m²]: given, or the history's."""
+    m = mass_from(hist, None) if mass is None else as_matrix(mass, hist.sizes["dof"], "mass")
+    if m is None:
+        raise InputError("no mass given: pass mass=... or store 'mass' in the history")
+    if not np.all(np.isfinite(m)):
+        raise InputError("mass must be finite")
+    return m
+
+
+def _prescribed_force(hist: xr.Dataset, force: str, comps: list[KnownComponent],
+                      moving: RegressionResult | None,
+                      moved: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """``F_p`` (n_time, n_dof) [N, N m]: F_bb, less the moved ``α z̈ + β ż + γ z`` of the
+    reference (the mean stays prescribed)."""
+    f_p = black_box_force(hist, force, comps)
+    if moving is not None:
+        alpha, beta, gamma = moved
+        z_ref, zd_ref, zdd_ref = kinematics(hist, ("z", "zdot", "zddot"))
+        f_p = f_p - zdd_ref @ alpha.T - zd_ref @ beta.T - z_ref @ gamma.T
+    return f_p
+
+
+class PrescribedODE:
+    """``(m + A_k − α) z̈ = Σ ode_force(known) + β ż + γ z + F_p(t)`` and its internal states.
+
+    Memoryless components with the default (linear) ``ode_force`` are folded into two matrices
+    once, instead of being rebuilt at every right-hand-side call (identical result).
+    """
+
+    def __init__(self, m: np.ndarray, comps: list[KnownComponent], alpha: np.ndarray,
+                 beta: np.ndarray, gamma: np.ndarray) -> None:
+        n = m.shape[0]
+        self.n_dof = n
+        self.a_k, self.b_k, self.c_k = summed_linear_coefficients(comps, n)
+        m_eff = m + self.a_k - alpha
+        sv = np.linalg.svd(m_eff, compute_uv=False)
+        if sv[-1] <= 1e-8 * np.linalg.norm(m + self.a_k, 2):
+            raise InputError(
+                "m + A_k − α is singular: the moved α cancels the inertia (α ≈ m + A_k, as when "
+                "F_bb is the whole equation of motion); move terms identified on a force "
+                "component"
+            )
+        self.m_inv = np.linalg.inv(m_eff)
+        linear = [c for c in comps if _is_plain_linear(c)]
+        self.other = [c for c in comps if not _is_plain_linear(c)]
+        _, b_lin, c_lin = summed_linear_coefficients(linear, n)
+        self.b_ode, self.c_ode = beta - b_lin, gamma - c_lin
+        self.offsets = np.cumsum([2 * n, *[c.n_states for c in self.other]])
+
+    def initial_states(self, hist: xr.Dataset) -> np.ndarray:
+        """The components' internal states at the first sample of ``hist``."""
+        return np.concatenate([np.zeros(0), *[c.initial_state(hist) for c in self.other]])
+
+    def accel_and_states(self, ti: float, y: np.ndarray, f_p: np.ndarray
+                         ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """z̈ [m/s², rad/s²] and the internal states' derivatives, with ``F_p(ti) = f_p``."""
+        n = self.n_dof
+        z, zd = y[:n], y[n:2 * n]
+        f = f_p + self.b_ode @ zd + self.c_ode @ z
+        dx = []
+        for c, lo, hi in zip(self.other, self.offsets[:-1], self.offsets[1:]):
+            x = y[lo:hi]
+            f = f + c.ode_force(ti, z, zd, x)
+            if c.n_states:
+                dx.append(c.state_derivative(ti, z, zd, x))
+        return self.m_inv @ f, dx
+
+
+def solve_prescribed(ode: PrescribedODE, u: np.ndarray, z0: np.ndarray, v0: np.ndarray,
+                     dt: float, *, progress: bool = False, t: np.ndarray, method: str = "DOP853",
+                     rtol: float = 1e-9, atol: float = 1e-12, x0: np.ndarray | None = None
+                     ) -> SolverResult:
+    """The reconstruction ODE by :func:`scipy.integrate.solve_ivp` (the solver contract).
+
+    ``u`` is ``F_p`` on the times ``t`` [N, N m] (not-a-knot cubic spline in between), ``dt``
+    the largest step [s] (so no force sample is stepped over), ``x0`` the components' states.
+    Returns z, ż, z̈ on ``t``; ``nfev`` the right-hand-side evaluations; a failure as data.
+    """
+    n = ode.n_dof
+    spline = _UniformSpline(t, u)
+
+    def rhs(ti: float, y: np.ndarray) -> np.ndarray:
+        acc, dx = ode.accel_and_states(ti, y, spline(ti))
+        return np.concatenate([y[n:2 * n], acc, *dx])
+
+    y0 = np.concatenate([z0, v0, np.zeros(0) if x0 is None else x0])
+    sol = scipy.integrate.solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t,
+                                    rtol=rtol, atol=atol, max_step=dt)
+    y = np.full((y0.size, t.size), np.nan)
+    done = np.asarray(sol.y, dtype=float).reshape(y0.size, -1)  # [] when the first step failed
+    y[:, :done.shape[1]] = done
+    z, v = y[:n].T, y[n:2 * n].T
+    kw = dict(x=y[2 * n:].T, method=method, nfev=int(sol.nfev),
+              counts={"samples": done.shape[1]})
+    if not sol.success or done.shape[1] != t.size:
+        return failure(t, z, v, f"reconstruction failed: {sol.message}", **kw)
+    t_bad = first_non_finite(t, z, v)
+    if t_bad is not None:
+        return failure(t, z, v, f"reconstruction diverged (non-finite state) at t = "
+                                f"{t_bad:.6g} s", **kw)
+    acc = np.array([ode.accel_and_states(ti, yi, spline(ti))[0] for ti, yi in zip(t, y.T)])
+    return SolverResult(t, z, v, a=acc, forces={"F_prescribed": u}, message=str(sol.message),
+                        **kw)

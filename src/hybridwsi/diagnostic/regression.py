@@ -600,16 +600,10 @@ def _blocks(
     return val, se, cov_idx
 
 
-def regress(
-    hist: xr.Dataset,
-    force: str = "F_tot",
-    known: Iterable[KnownComponent | str] = (),
-    *,
-    fix_alpha: float | np.ndarray | None = None,
-    hac_lags: int | None = None,
-    frequency_tol: float = 0.05,
-    force_accuracy: float | Sequence[float] = FORCE_ACCURACY,
-) -> RegressionResult:
+def regress(hist: xr.Dataset, force: str = "F_tot", known: Iterable[KnownComponent | str] = (),
+            *, fix_alpha: float | np.ndarray | None = None, hac_lags: int | None = None,
+            frequency_tol: float = 0.05,
+            force_accuracy: float | Sequence[float] = FORCE_ACCURACY) -> RegressionResult:
     """Regress the black-box force on the reference motion (paper Eq. 5–7 with an intercept).
 
     Parameters
@@ -632,16 +626,94 @@ def regress(
         Relative accuracy of ``hist[force]`` per DOF (RMS error over RMS of the centred force;
         default 0.01, typical of CFD/SPH; use ~1e-6 or less for BEM/Cummins data, whose force is
         exact to the integrator's precision). The split is called identifiable only when a force
-        error larger than this is needed to move α or γ by 10 %.
+        error larger than this is needed to move α or γ by 10 % (:func:`_identifiability`).
 
     Returns
     -------
     RegressionResult
+        ``singular_values`` and ``condition_number`` are those of the centred,
+        column-normalised regressor matrix *without* the intercept column.
+    """
+    validate(hist)
+    if hac_lags is not None and (not isinstance(hac_lags, (int, np.integer)) or hac_lags < 0):
+        raise InputError(f"hac_lags must be a non-negative integer, got {hac_lags!r}")
+    if not 0 < frequency_tol < 1:
+        raise InputError(f"frequency_tol must be in (0, 1), got {frequency_tol!r}")
+    comps = as_components(known)
+    z, zd, zdd = kinematics(hist)
+    n, n_dof = z.shape
+    accuracy = _force_accuracy(force_accuracy, n_dof)
+    f_bb = black_box_force(hist, force, comps)
+    # refuse here what would otherwise overflow in the fit (garbage α, β, γ or a NaN lag)
+    check_regressors({"z": z, "zdot": zd, "zddot": zdd}, {f"{force} - known": f_bb})
+    alpha_fixed = _fixed_alpha(fix_alpha, n_dof)
+    fixed = alpha_fixed is not None
+    terms = ("beta", "gamma") if fixed else _TERMS
+    if n < 3 * len(terms) * n_dof + 2:
+        raise InputError(f"{n} samples are too few to regress {len(terms) * n_dof + 1} coefficients")
+    y = f_bb - zdd @ alpha_fixed.T if fixed else f_bb
+    fit = _fit(np.hstack([zd, z] if fixed else [zdd, zd, z]), y, hac_lags)
+    val, se, idx = _blocks(fit, n_dof, terms)
+    if fixed:
+        val["alpha"], se["alpha"] = alpha_fixed, np.zeros((n_dof, n_dof))
+    st = _statistics(fit, val, se, terms, f_bb, {"alpha": zdd, "beta": zd, "gamma": z})
+    f_gen = np.asarray(hist[force].values, dtype=float)  # the generator's force (δF_bb = δF)
+    ident = _identifiability(fit, terms, n_dof, f_gen, accuracy, st["nse"])
+    dofs = [str(d) for d in hist["dof"].values]
+    dt = float((hist["time"].values[-1] - hist["time"].values[0]) / (n - 1))
+    omega0, combos, warnings_ = _interpretation(hist, force, fit, val, idx, terms, z, dt,
+                                                frequency_tol, st, ident, accuracy)
+    return RegressionResult(
+        alpha=val["alpha"], beta=val["beta"], gamma=val["gamma"], mean_force=fit.intercept,
+        stderr={**{k: se[k] for k in _TERMS}, "mean_force": st["mean_se"]}, ci95=st["ci"],
+        r2=st["r2"], singular_values=fit.sv, condition_number=st["cond"],
+        identifiable=bool(ident["dof"].all()), identifiable_combinations=combos,
+        warnings=warnings_, dominant_omega=omega0, n_samples=n, force=force,
+        known=[c.describe() for c in comps], dof=dofs, fixed_alpha=fixed, hac_lags=fit.lags,
+        normalised_stderr=st["nse"], force_accuracy=accuracy,
+        force_error_10pct=ident["eps_dof"], force_error_terms=ident["eps_terms"],
+        identifiable_dof=ident["dof"],
+    )
 
-    Notes
-    -----
-    ``singular_values`` and ``condition_number`` are those of the centred, column-normalised
-    regressor matrix *without* the intercept column. DOF i is identifiable when
+
+def _fixed_alpha(fix_alpha: float | np.ndarray | None, n_dof: int) -> np.ndarray | None:
+    """The fixed α (n_dof, n_dof) [kg, kg m, kg m²], or None when α is regressed."""
+    if fix_alpha is None:
+        return None
+    alpha = as_matrix(fix_alpha, n_dof, "fix_alpha")
+    if not np.all(np.isfinite(alpha)):
+        raise InputError("fix_alpha must be finite")
+    return alpha
+
+
+def _statistics(fit: _Fit, val: dict[str, np.ndarray], se: dict[str, np.ndarray],
+                terms: Sequence[str], f_bb: np.ndarray, kin: dict[str, np.ndarray]
+                ) -> dict[str, Any]:
+    """Standard error of F̄, 95 % intervals, R² per DOF, condition number and the normalised
+    standard errors ``‖stderr‖ · rms(centred regressor) / rms(centred F_bb)`` per term."""
+    n = f_bb.shape[0]
+    mean_se = np.array([math.sqrt(max(c[0, 0], 0.0)) for c in fit.cov])
+    ci = {k: np.stack([val[k] - Z95 * se[k], val[k] + Z95 * se[k]], axis=-1) for k in _TERMS}
+    pred = (fit.intercept + kin["alpha"] @ val["alpha"].T + kin["beta"] @ val["beta"].T
+            + kin["gamma"] @ val["gamma"].T)
+    ss_tot = ((f_bb - f_bb.mean(axis=0)) ** 2).sum(axis=0)
+    ss_res = ((f_bb - pred) ** 2).sum(axis=0)
+    r2 = np.where(ss_tot > 0, 1.0 - ss_res / np.where(ss_tot > 0, ss_tot, 1.0), 1.0)
+    sv = fit.sv
+    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
+    f_rms = float(np.sqrt(ss_tot.sum() / n)) or 1.0
+    nse = {}
+    for k in terms:
+        reg_rms = np.sqrt(((kin[k] - kin[k].mean(axis=0)) ** 2).mean(axis=0))  # per DOF j
+        nse[k] = float(np.linalg.norm(se[k] * reg_rms[None, :]) / f_rms)
+    return {"mean_se": mean_se, "ci": ci, "r2": r2, "cond": cond, "nse": nse}
+
+
+def _identifiability(fit: _Fit, terms: Sequence[str], n_dof: int, f_gen: np.ndarray,
+                     accuracy: np.ndarray, nse: dict[str, float]) -> dict[str, Any]:
+    """Per DOF, whether α and γ are identifiable under the stated force accuracy.
+
+    DOF i is identifiable when
 
     - ``force_error_10pct[i] > force_accuracy[i]``: the smallest relative error of the force on
       i that moves any α_ij or γ_ij by 10 % (:func:`force_error_for_shift`) exceeds the stated
@@ -656,72 +728,40 @@ def regress(
     quantitative form (ε ≈ 0.1 S_min/|V_k,min| for a term about as large as the force, so at 1 %
     accuracy a condition number above ~20 already fails, and the old limit 1e3 corresponded to
     an accuracy of ~1e-4), and with a stated accuracy of 1e-5 noise-free data of condition 1e4
-    are rightly identifiable.
+    are rightly identifiable. ``f_gen`` is the generator's force (δF_bb = δF) [N, N m].
     """
-    validate(hist)
-    if hac_lags is not None and (not isinstance(hac_lags, (int, np.integer)) or hac_lags < 0):
-        raise InputError(f"hac_lags must be a non-negative integer, got {hac_lags!r}")
-    if not 0 < frequency_tol < 1:
-        raise InputError(f"frequency_tol must be in (0, 1), got {frequency_tol!r}")
-    comps = as_components(known)
-    z, zd, zdd = kinematics(hist)
-    n, n_dof = z.shape
-    accuracy = _force_accuracy(force_accuracy, n_dof)
-    f_bb = black_box_force(hist, force, comps)
-    # refuse here what would otherwise overflow in the fit (garbage α, β, γ or a NaN lag)
-    check_regressors({"z": z, "zdot": zd, "zddot": zdd}, {f"{force} - known": f_bb})
-    fixed = fix_alpha is not None
-    terms = ("beta", "gamma") if fixed else _TERMS
-    alpha_fixed = as_matrix(fix_alpha, n_dof, "fix_alpha") if fixed else None
-    if fixed and not np.all(np.isfinite(alpha_fixed)):
-        raise InputError("fix_alpha must be finite")
-    if n < 3 * len(terms) * n_dof + 2:
-        raise InputError(f"{n} samples are too few to regress {len(terms) * n_dof + 1} coefficients")
-    y = f_bb - zdd @ alpha_fixed.T if fixed else f_bb
-    x = np.hstack([zd, z] if fixed else [zdd, zd, z])
-    fit = _fit(x, y, hac_lags)
-
-    val, se, idx = _blocks(fit, n_dof, terms)
-    if fixed:
-        val["alpha"], se["alpha"] = alpha_fixed, np.zeros((n_dof, n_dof))
-    mean_se = np.array([math.sqrt(max(c[0, 0], 0.0)) for c in fit.cov])
-    ci = {k: np.stack([val[k] - Z95 * se[k], val[k] + Z95 * se[k]], axis=-1) for k in _TERMS}
-    pred = fit.intercept + zdd @ val["alpha"].T + zd @ val["beta"].T + z @ val["gamma"].T
-    ss_tot = ((f_bb - f_bb.mean(axis=0)) ** 2).sum(axis=0)
-    ss_res = ((f_bb - pred) ** 2).sum(axis=0)
-    r2 = np.where(ss_tot > 0, 1.0 - ss_res / np.where(ss_tot > 0, ss_tot, 1.0), 1.0)
-
-    sv = fit.sv
-    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
-    f_rms = float(np.sqrt(ss_tot.sum() / n)) or 1.0
-    kin = {"alpha": zdd, "beta": zd, "gamma": z}
-    nse = {}
-    for k in terms:
-        reg_rms = np.sqrt(((kin[k] - kin[k].mean(axis=0)) ** 2).mean(axis=0))  # per DOF j
-        nse[k] = float(np.linalg.norm(se[k] * reg_rms[None, :]) / f_rms)
-    f_gen = np.asarray(hist[force].values, dtype=float)  # the generator's force (δF_bb = δF)
     f_norm = np.linalg.norm(f_gen - f_gen.mean(axis=0), axis=0)
     eps_terms = _force_errors(fit, terms, n_dof, f_norm)
     eps_dof = np.minimum(eps_terms["alpha"].min(axis=1), eps_terms["gamma"].min(axis=1))
     stderr_ok = all(nse.get(k, 0.0) < REL_STDERR_MAX for k in ("alpha", "gamma"))
     ident_dof = (eps_dof > accuracy) & stderr_ok  # NaN (constant force) is never identifiable
-    identifiable = bool(ident_dof.all())
+    return {"f_norm": f_norm, "eps_terms": eps_terms, "eps_dof": eps_dof,
+            "stderr_ok": stderr_ok, "dof": ident_dof}
 
-    dt = float((hist["time"].values[-1] - hist["time"].values[0]) / (n - 1))
+
+def _interpretation(hist: xr.Dataset, force: str, fit: _Fit, val: dict[str, np.ndarray],
+                    idx: dict[str, np.ndarray], terms: Sequence[str], z: np.ndarray, dt: float,
+                    frequency_tol: float, st: dict[str, Any], ident: dict[str, Any],
+                    accuracy: np.ndarray) -> tuple[float | None, list[dict[str, Any]], list[str]]:
+    """Dominant frequency [rad/s], the combinations the data determine when the split is not
+    identifiable, and the plain-language warnings."""
+    n_dof = z.shape[1]
+    dofs = [str(d) for d in hist["dof"].values]
     omega0, _ = dominant_frequency(z, dt, band_rtol=frequency_tol)
     warnings_: list[str] = []
     combos: list[dict[str, Any]] = []
-    if not identifiable:
-        reason = _reason(hist["dof"].values, eps_dof, accuracy, cond, nse, stderr_ok)
-        omega0 = _explain(fit, val, idx, terms, n_dof, z, dt, frequency_tol, reason,
-                          [str(d) for d in hist["dof"].values], combos, warnings_) or omega0
-    if np.any(f_norm == 0):
+    if not ident["dof"].all():
+        reason = _reason(dofs, ident["eps_dof"], accuracy, st["cond"], st["nse"],
+                         ident["stderr_ok"])
+        omega0 = _explain(fit, val, idx, terms, n_dof, z, dt, frequency_tol, reason, dofs,
+                          combos, warnings_) or omega0
+    if np.any(ident["f_norm"] == 0):
         warnings_.append(f"'{force}' is constant on some DOF: a relative force accuracy means "
                          "nothing there, so that DOF is not called identifiable")
-    if np.any(r2 < 0.9):
+    if np.any(st["r2"] < 0.9):
         warnings_.append(
-            f"the linear model explains only {100 * float(r2.min()):.1f} % of the variance of "
-            "F_bb: the force is not well described by constant α, β, γ (nonlinear or "
+            f"the linear model explains only {100 * float(st['r2'].min()):.1f} % of the variance "
+            "of F_bb: the force is not well described by constant α, β, γ (nonlinear or "
             "history-dependent terms)"
         )
     est = [k for k in ("zdot", "zddot") if hist[k].attrs.get("estimated")]
@@ -730,18 +770,7 @@ def regress(
             f"{' and '.join(est)} were estimated from z: derivative errors bias α (and γ) "
             "along the direction the data cannot resolve"
         )
-    return RegressionResult(
-        alpha=val["alpha"], beta=val["beta"], gamma=val["gamma"],
-        mean_force=fit.intercept,
-        stderr={**{k: se[k] for k in _TERMS}, "mean_force": mean_se},
-        ci95=ci, r2=r2, singular_values=sv, condition_number=cond,
-        identifiable=bool(identifiable), identifiable_combinations=combos,
-        warnings=warnings_, dominant_omega=omega0, n_samples=n, force=force,
-        known=[c.describe() for c in comps], dof=[str(d) for d in hist["dof"].values],
-        fixed_alpha=fixed, hac_lags=fit.lags, normalised_stderr=nse,
-        force_accuracy=accuracy, force_error_10pct=eps_dof, force_error_terms=eps_terms,
-        identifiable_dof=ident_dof,
-    )
+    return omega0, combos, warnings_
 
 
 def _reason(
@@ -761,29 +790,12 @@ def _reason(
     return f"condition number {cond:.3g}; " + "; ".join(parts)
 
 
-def _explain(
-    fit: _Fit,
-    val: dict[str, np.ndarray],
-    idx: dict[str, np.ndarray],
-    terms: Sequence[str],
-    n_dof: int,
-    z: np.ndarray,
-    dt: float,
-    frequency_tol: float,
-    reason: str,
-    dofs: Sequence[str],
-    combos: list[dict[str, Any]],
-    warnings_: list[str],
-) -> float | None:
-    """Fill the identifiable combinations and warnings of a non-identifiable fit."""
+def _weak_directions(fit: _Fit, terms: Sequence[str], n_dof: int,
+                     combos: list[dict[str, Any]], warnings_: list[str]) -> None:
+    """The weakest direction(s) of the normalised regressors, mapped to physical (Δα, Δβ, Δγ):
+    the null space when the regressors are linearly dependent."""
     sv = fit.sv
     rank_deficient = sv[-1] <= RANK_RTOL * sv[0]
-    warnings_.append(
-        f"α, β, γ are not separately identifiable ({reason}): the regressors z̈, ż, z are "
-        "(nearly) linearly dependent, so the split reported is one of many that fit the force "
-        "within its accuracy"
-    )
-    # weakest direction(s) of the normalised regressors, mapped to physical coefficients
     n_null = int(np.sum(sv <= RANK_RTOL * sv[0])) if rank_deficient else 1
     for v in fit.vt[-n_null:]:
         d_phys = v / fit.scale
@@ -802,6 +814,30 @@ def _explain(
             "z̈, ż, z satisfy its own equation of motion): the split of α, β, γ is not unique; "
             "see the null_direction"
         )
+
+
+def _explain(
+    fit: _Fit,
+    val: dict[str, np.ndarray],
+    idx: dict[str, np.ndarray],
+    terms: Sequence[str],
+    n_dof: int,
+    z: np.ndarray,
+    dt: float,
+    frequency_tol: float,
+    reason: str,
+    dofs: Sequence[str],
+    combos: list[dict[str, Any]],
+    warnings_: list[str],
+) -> float | None:
+    """Fill the identifiable combinations and warnings of a non-identifiable fit: the
+    weakest (or null) direction of (α, β, γ), then what the dominant frequency determines."""
+    warnings_.append(
+        f"α, β, γ are not separately identifiable ({reason}): the regressors z̈, ż, z are "
+        "(nearly) linearly dependent, so the split reported is one of many that fit the force "
+        "within its accuracy"
+    )
+    _weak_directions(fit, terms, n_dof, combos, warnings_)
     omega, share = dominant_frequency(z, dt, refine=True, band_rtol=frequency_tol)
     if omega is None or "alpha" not in terms:
         return omega

@@ -1,17 +1,22 @@
-"""Stability of a force partition in three settings (docs/THEORY.md §4).
+"""Stability of a force partition in three settings, assessed in one place (docs/THEORY.md §4).
 
-The known part is written ``F_known = −A_k z̈ − B_k ż − C_k z`` (matrices n×n, from
-:func:`hybridwsi.forces.summed_linear_coefficients`); ``m`` is the rigid-body mass.
+A partition is described by a :class:`CoupledStep`: the rigid-body mass ``m``, the known part
+``F_known = −A_k z̈ − B_k ż − C_k z`` (matrices n×n, from
+:func:`hybridwsi.forces.summed_linear_coefficients`; ``A_k`` is A∞, ``added_mass_inf``, when
+the added mass is known), the learned (or identified) part linearised as
+``F_s ≈ α z̈ + β ż + γ z``, and the step Δt, scheme and coupling mode of the hybrid solver.
+:func:`assess` judges it and returns one :class:`StabilityReport`:
 
-a. :func:`prescribed_force_stability` — reconstruction with a prescribed ``F_bb(t)`` (paper
-   Eq. 4): the error ``e = z − z_ref`` obeys ``(m + A_k) ë + B_k ė + C_k e = 0``.
-b. :func:`surrogate_stability` — a state-dependent surrogate linearised as
-   ``F_s ≈ α_s z̈ + β_s ż + γ_s z`` in a continuous (monolithic) loop:
-   ``(m + A_k − α_s) z̈ + (B_k − β_s) ż + (C_k − γ_s) z = 0``.
-c. :func:`loosely_coupled_stability` — the surrogate sees the previous step's kinematics; the
-   one-step amplification matrix is built from the very step function the hybrid rollout uses,
+a. prescribed force — reconstruction with a prescribed ``F_bb(t)`` (paper Eq. 4): the error
+   ``e = z − z_ref`` obeys ``(m + A_k) ë + B_k ė + C_k e = 0``.
+b. continuous — the surrogate in a continuous (monolithic) loop:
+   ``(m + A_k − α) z̈ + (B_k − β) ż + (C_k − γ) z = 0``.
+c. loosely coupled — the surrogate sees the previous step's kinematics; the one-step
+   amplification matrix is built from the very step function the hybrid rollout uses,
    :func:`hybridwsi.diagnostic.integrators.lagged_step` (documented there), and
-   :func:`max_stable_dt` finds the largest stable Δt.
+   :func:`max_stable_dt` finds the largest stable Δt. A rollout whose surrogate has memory
+   (feature lags) passes the amplification matrix of its own step map instead
+   (``assess(step, step_map=G)``, :func:`hybridwsi.surrogate.rollout.check_stability`).
 
 Eigenvalues of the second-order systems are the generalised eigenvalues of the first-order
 pencil ``([0, I; −C, −B], [I, 0; 0, M])`` (infinite ones when M is singular).
@@ -20,8 +25,8 @@ pencil ``([0, I; −C, −B], [I, 0; 0, M])`` (infinite ones when M is singular)
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -29,6 +34,7 @@ import scipy.linalg
 
 from hybridwsi.forces import KnownComponent, as_matrix, summed_linear_coefficients
 from hybridwsi.diagnostic.integrators import check_scheme, lagged_step
+from hybridwsi.diagnostic.regression import as_components
 from hybridwsi.errors import InputError
 
 #: real parts within this fraction of the largest |eigenvalue| count as zero
@@ -37,33 +43,158 @@ RE_RTOL = 1e-9
 RHO_TOL = 1e-9
 #: relative singular-value threshold for "singular" matrices
 SING_RTOL = 1e-12
+#: coupling modes of the hybrid solver (:mod:`hybridwsi.surrogate.coupled`)
+MODES = ("lagged", "corrected", "implicit")
+#: the matrices of a CoupledStep, in order, with their symbols
+MATRICES = {"mass": "m", "known_mass": "A_k", "known_damping": "B_k",
+            "known_stiffness": "C_k", "alpha": "α", "beta": "β", "gamma": "γ"}
 
 
+def _num(x: Any) -> Any:
+    """A JSON number: None for None/NaN/−inf, the string "inf" for +inf."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else ("inf" if x > 0 else None)
+
+
+def _from_num(x: Any) -> float | None:
+    """Inverse of :func:`_num` (None stays None)."""
+    return None if x is None else (math.inf if x == "inf" else float(x))
+
+
+# --------------------------------------------------------------------------- the step
+@dataclass(frozen=True, eq=False)
+class CoupledStep:
+    """The matrices and Δt of a coupled step: everything the stability of a partition depends
+    on (docs/THEORY.md §4).
+
+    Matrices are n×n in force-equation orientation ``[influenced i, radiating j]`` with units
+    per DOF pair (:func:`hybridwsi.dofs.coefficient_unit`: kg, N s/m, N/m for translations; kg
+    m², N m s/rad, N m/rad for rotations); a scalar means that value times the identity, a
+    vector the diagonal.
+
+    Attributes
+    ----------
+    mass : ndarray
+        Rigid-body mass ``m``.
+    known_mass, known_damping, known_stiffness : ndarray
+        ``A_k, B_k, C_k`` of the known components, ``F_known = −A_k z̈ − B_k ż − C_k z``
+        (``A_k`` is A∞, ``added_mass_inf``, when the added mass is known).
+    alpha, beta, gamma : ndarray
+        ``α, β, γ`` of the learned (or identified) component, ``F_s ≈ α z̈ + β ż + γ z``.
+    dt : float or None
+        Step of the hybrid solver [s]; None for the continuous settings only.
+    scheme : {"newmark", "semi_implicit_euler"}
+        Integrator of the lagged step (:mod:`hybridwsi.diagnostic.integrators`).
+    mode : {"lagged", "corrected", "implicit"}
+        Coupling of the learned force (:mod:`hybridwsi.surrogate.coupled`).
+    corrections : int
+        Predictor-corrector passes of the ``corrected`` mode (0 otherwise).
+    """
+
+    mass: np.ndarray
+    known_mass: np.ndarray = 0.0  # type: ignore[assignment]
+    known_damping: np.ndarray = 0.0  # type: ignore[assignment]
+    known_stiffness: np.ndarray = 0.0  # type: ignore[assignment]
+    alpha: np.ndarray = 0.0  # type: ignore[assignment]
+    beta: np.ndarray = 0.0  # type: ignore[assignment]
+    gamma: np.ndarray = 0.0  # type: ignore[assignment]
+    dt: float | None = None
+    scheme: str = "newmark"
+    mode: str = "lagged"
+    corrections: int = 0
+
+    def __post_init__(self) -> None:
+        values = [getattr(self, k) for k in MATRICES]
+        n = 1
+        for v in values:
+            a = np.asarray(v, dtype=float)
+            n = max(n, a.shape[0] if a.ndim == 2 else (a.size if a.ndim == 1 else 1))
+        for name, v in zip(MATRICES, values):
+            m = np.array(as_matrix(0.0 if v is None else v, n, name), dtype=float)
+            if not np.all(np.isfinite(m)):
+                raise InputError(f"{name} ({MATRICES[name]}) must be finite")
+            m.setflags(write=False)
+            object.__setattr__(self, name, m)
+        check_scheme(self.scheme)
+        if self.mode not in MODES:
+            raise InputError(f"mode must be one of {', '.join(MODES)}, got '{self.mode}'")
+        if self.dt is not None:
+            dt = self.dt
+            if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
+                raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
+            object.__setattr__(self, "dt", float(dt))
+        object.__setattr__(self, "corrections", int(self.corrections))
+
+    @classmethod
+    def from_components(cls, mass: float | np.ndarray,
+                        known: Iterable[KnownComponent | str] = (), surrogate: Any = None,
+                        **step: Any) -> CoupledStep:
+        """The step of a partition: ``A_k, B_k, C_k`` summed over the ``known`` components
+        (objects or ``"NAME=VALUE"``), ``α, β, γ`` from ``surrogate`` (anything with
+        ``alpha, beta, gamma``, e.g. a :class:`~hybridwsi.diagnostic.RegressionResult` or a
+        network's linearisation; None: no learned part); ``step`` sets ``dt``, ``scheme``,
+        ``mode``, ``corrections``."""
+        comps = as_components(known)
+        m = np.asarray(mass, dtype=float)
+        n = (np.asarray(surrogate.alpha).shape[0] if surrogate is not None
+             else (m.shape[0] if m.ndim else 1))
+        a, b, c = summed_linear_coefficients(comps, n)
+        learned = {} if surrogate is None else {
+            k: np.asarray(getattr(surrogate, k), dtype=float) for k in ("alpha", "beta", "gamma")}
+        return cls(as_matrix(mass, n, "mass"), a, b, c, **learned, **step)
+
+    @property
+    def n_dof(self) -> int:
+        return self.mass.shape[0]
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """``m + A_k``, the matrix of z̈ in the ODE [kg, kg m, kg m²]."""
+        return self.mass + self.known_mass
+
+    def with_dt(self, dt: float | None) -> CoupledStep:
+        """The same step at another Δt [s]."""
+        return replace(self, dt=dt)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: matrices as nested lists [units per DOF pair], dt [s], scheme, mode."""
+        return {**{k: getattr(self, k).tolist() for k in MATRICES},
+                "dt": self.dt, "scheme": self.scheme, "mode": self.mode,
+                "corrections": self.corrections}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> CoupledStep:
+        """Inverse of :meth:`to_dict`."""
+        return cls(**{k: np.asarray(d[k], dtype=float) for k in MATRICES}, dt=d.get("dt"),
+                   scheme=d.get("scheme", "newmark"), mode=d.get("mode", "lagged"),
+                   corrections=int(d.get("corrections", 0)))
+
+
+# --------------------------------------------------------------------------- the verdicts
 @dataclass
-class StabilityReport:
-    """Outcome of one stability setting.
+class SettingVerdict:
+    """The verdict of one setting (a, b or c) of a :class:`StabilityReport`.
 
     Attributes
     ----------
     setting : str
-        ``"prescribed_force"``, ``"surrogate"`` or ``"loosely_coupled"``.
+        ``"prescribed_force"`` (a), ``"surrogate"`` (b, continuous) or ``"loosely_coupled"``
+        (c).
     verdict : str
-        Short keyword: ``drift``/``neutral``/``damped``/``unstable`` (a),
-        ``stable``/``marginal``/``unstable`` (b, c).
+        ``drift``/``neutral``/``damped``/``unstable`` (a), ``stable``/``marginal``/``unstable``
+        (b, c).
     message : str
         Plain-language explanation.
-    eigenvalues : ndarray or None
+    eigenvalues : ndarray
         Continuous eigenvalues [1/s] (a, b) or eigenvalues of the one-step map (c).
-    spectral_radius : float or None
-        Largest |eigenvalue| of the one-step map (c).
-    dt : float or None
-        Time step [s] (c).
+    spectral_radius, dt, max_stable_dt : float or None
+        Largest |eigenvalue| of the one-step map, its Δt and the largest stable Δt [s] (c).
     scheme : str or None
         Integrator (c).
-    max_stable_dt : float or None
-        Largest stable time step [s] (c); ``inf`` when stable at every tested step.
     conditions : dict
-        Setting-specific details (sign conditions, added-mass ratio, ...).
+        Setting-specific details (sign conditions, drift directions, added-mass ratio).
     """
 
     setting: str
@@ -83,52 +214,127 @@ class StabilityReport:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (complex eigenvalues as ``[re, im]``; inf as the string)."""
-        def num(x: Any) -> Any:
-            if x is None:
-                return None
-            x = float(x)
-            return x if math.isfinite(x) else ("inf" if x > 0 else None)
-
         eig = None
         if self.eigenvalues is not None:
-            eig = [[num(v.real), num(v.imag)] for v in np.asarray(self.eigenvalues, complex)]
+            eig = [[_num(v.real), _num(v.imag)] for v in np.asarray(self.eigenvalues, complex)]
         return {
             "setting": self.setting,
             "verdict": self.verdict,
             "message": self.message,
             "eigenvalues": eig,
-            "spectral_radius": num(self.spectral_radius),
-            "dt": num(self.dt),
+            "spectral_radius": _num(self.spectral_radius),
+            "dt": _num(self.dt),
             "scheme": self.scheme,
-            "max_stable_dt": num(self.max_stable_dt),
-            "conditions": {k: (num(v) if isinstance(v, (float, int, np.floating)) and
+            "max_stable_dt": _num(self.max_stable_dt),
+            "conditions": {k: (_num(v) if isinstance(v, (float, int, np.floating)) and
                                not isinstance(v, bool) else v)
                            for k, v in self.conditions.items()},
         }
 
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> SettingVerdict:
+        """Inverse of :meth:`to_dict` (a None eigenvalue part, an infinite one, is inf)."""
+        eig = d.get("eigenvalues")
+        if eig is not None:
+            eig = np.array([complex(math.inf if re is None else re, 0.0 if im is None else im)
+                            for re, im in eig])
+        cond = {k: (_from_num(v) if v == "inf" else v) for k, v in d.get("conditions", {}).items()}
+        return cls(d["setting"], d["verdict"], d["message"], eig, _from_num(d.get("spectral_radius")),
+                   _from_num(d.get("dt")), d.get("scheme"), _from_num(d.get("max_stable_dt")), cond)
+
+
+@dataclass
+class StabilityReport:
+    """The stability of a coupled step: the one result type of the assessment (:func:`assess`).
+
+    Attributes
+    ----------
+    step : CoupledStep
+        What was assessed (matrices, Δt, scheme, mode), so α, β, γ of the learned component
+        travel with the verdict.
+    prescribed, continuous : SettingVerdict
+        Settings (a) and (b).
+    loosely_coupled : SettingVerdict or None
+        Setting (c) at ``step.dt`` for the lag-0 sensitivities α, β, γ (None without a Δt).
+    spectral_radius : float or None
+        Spectral radius of the coupled step map at ``step.dt``: setting (c)'s, or that of the
+        step map the caller passed (a rollout's, with every feature lag of its network).
+    added_mass_ratio : float
+        ``max |eig((m + A_k)⁻¹ α)|``: ≥ 1 is the added-mass instability of the lagged coupling
+        at every Δt, and the divergence of the implicit fixed point.
+    max_stable_dt : float or None
+        Largest stable Δt [s] of the lagged step (inf: stable at every tested Δt).
+    rho_tol : float
+        Margin on the spectral radius of :attr:`stable`.
+    """
+
+    step: CoupledStep
+    prescribed: SettingVerdict
+    continuous: SettingVerdict
+    loosely_coupled: SettingVerdict | None
+    spectral_radius: float | None
+    added_mass_ratio: float
+    max_stable_dt: float | None
+    rho_tol: float = RHO_TOL
+
+    @property
+    def continuous_stable(self) -> bool:
+        """Setting (b): the surrogate in a continuous loop does not make errors grow."""
+        return self.continuous.stable
+
+    @property
+    def stable(self) -> bool:
+        """The coupled run is predicted stable: spectral radius ≤ 1 + ``rho_tol`` at Δt (and,
+        for the ``implicit`` mode, a contracting fixed point, added-mass ratio < 1); without a
+        Δt, setting (b)."""
+        if self.spectral_radius is None:
+            return self.continuous_stable
+        return bool(self.spectral_radius <= 1.0 + self.rho_tol
+                    and (self.step.mode != "implicit" or self.added_mass_ratio < 1.0))
+
+    @property
+    def settings(self) -> list[SettingVerdict]:
+        """The settings assessed, (a), (b) and, with a Δt, (c)."""
+        return [s for s in (self.prescribed, self.continuous, self.loosely_coupled)
+                if s is not None]
+
+    # the learned component's α, β, γ (the names of the rollout's former prediction)
+    @property
+    def alpha_s(self) -> np.ndarray:
+        return self.step.alpha
+
+    @property
+    def beta_s(self) -> np.ndarray:
+        return self.step.beta
+
+    @property
+    def gamma_s(self) -> np.ndarray:
+        return self.step.gamma
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary; :meth:`from_dict` restores it."""
+        return {
+            "step": self.step.to_dict(),
+            "stable": self.stable,
+            "continuous_stable": self.continuous_stable,
+            "spectral_radius": _num(self.spectral_radius),
+            "added_mass_ratio": _num(self.added_mass_ratio),
+            "max_stable_dt": _num(self.max_stable_dt),
+            "rho_tol": self.rho_tol,
+            "settings": {s.setting: s.to_dict() for s in self.settings},
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> StabilityReport:
+        """Inverse of :meth:`to_dict`."""
+        sets = {k: SettingVerdict.from_dict(v) for k, v in d["settings"].items()}
+        return cls(CoupledStep.from_dict(d["step"]), sets["prescribed_force"], sets["surrogate"],
+                   sets.get("loosely_coupled"), _from_num(d.get("spectral_radius")),
+                   _from_num(d["added_mass_ratio"]), _from_num(d.get("max_stable_dt")),
+                   float(d.get("rho_tol", RHO_TOL)))
+
 
 # --------------------------------------------------------------------------- helpers
-def _n_dof(*values: Any) -> int:
-    n = 1
-    for v in values:
-        a = np.asarray(v, dtype=float)
-        if a.ndim == 2:
-            n = max(n, a.shape[0])
-        elif a.ndim == 1:
-            n = max(n, a.size)
-    return n
-
-
-def _mats(n: int, **values: Any) -> list[np.ndarray]:
-    out = []
-    for name, v in values.items():
-        m = as_matrix(0.0 if v is None else v, n, name)
-        if not np.all(np.isfinite(m)):
-            raise InputError(f"{name} must be finite")
-        out.append(m)
-    return out
-
-
 def system_eigenvalues(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     """Eigenvalues λ [1/s] of ``M ë + B ė + C e = 0`` (generalised; inf where M is singular)."""
     n = mass.shape[0]
@@ -171,36 +377,53 @@ def _min_sym_eig(m: np.ndarray) -> float:
     return float(np.linalg.eigvalsh(0.5 * (m + m.T)).min())
 
 
-# --------------------------------------------------------------------------- (a)
-def prescribed_force_stability(
-    mass: float | np.ndarray,
-    A_k: float | np.ndarray = 0.0,
-    B_k: float | np.ndarray = 0.0,
-    C_k: float | np.ndarray = 0.0,
-) -> StabilityReport:
-    """Error dynamics of the reconstruction with a prescribed force (docs/THEORY.md §4a).
+# --------------------------------------------------------------------------- assessment
+def assess(step: CoupledStep, *, step_map: np.ndarray | None = None,
+           rho_tol: float = RHO_TOL) -> StabilityReport:
+    """Judge a coupled step in the three settings (docs/THEORY.md §4): the one assessment.
 
     Parameters
     ----------
-    mass : float or ndarray
-        Rigid-body mass m [kg] (scalar, diagonal vector or n×n matrix).
-    A_k, B_k, C_k : float or ndarray
-        Known added mass [kg], damping [N s/m] and stiffness [N/m], ``F_known = −A_k z̈ − B_k ż
-        − C_k z``.
+    step : CoupledStep
+        Mass, known part, learned part, Δt, scheme, mode.
+    step_map : ndarray, optional
+        Amplification matrix of the caller's own step map at ``step.dt`` (a rollout whose
+        network has several feature lags); its spectral radius is the report's. Default: the
+        map of :func:`hybridwsi.diagnostic.integrators.lagged_step` (setting c).
+    rho_tol : float
+        Margin on the spectral radius of :attr:`StabilityReport.stable`.
 
     Returns
     -------
     StabilityReport
-        ``verdict`` is ``"drift"`` (zero eigenvalue with a Jordan block: errors grow linearly),
-        ``"neutral"`` (eigenvalues on the imaginary axis: errors persist), ``"damped"`` (all
-        Re λ < 0) or ``"unstable"`` (some Re λ > 0).
+
+    Raises
+    ------
+    InputError
+        ``m + A_k`` singular (no acceleration can be solved for).
     """
-    n = _n_dof(mass, A_k, B_k, C_k)
-    m, a, b, c = _mats(n, mass=mass, A_k=A_k, B_k=B_k, C_k=C_k)
-    m_tot = m + a
-    if _is_singular(m_tot):
+    if _is_singular(step.inertia):
         raise InputError("m + A_k is singular: the ODE cannot be solved for the acceleration")
-    lam = system_eigenvalues(m_tot, b, c)
+    ratio = added_mass_ratio(step.mass, step.known_mass, step.alpha)
+    lagged = None if step.dt is None else _loosely_coupled(step, ratio)
+    rho = None if lagged is None else lagged.spectral_radius
+    if step_map is not None:
+        rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
+    return StabilityReport(step, _prescribed(step), _continuous(step), lagged, rho, ratio,
+                           None if lagged is None else lagged.max_stable_dt, float(rho_tol))
+
+
+def added_mass_ratio(mass: np.ndarray, known_mass: np.ndarray, alpha: np.ndarray) -> float:
+    """Spectral radius of ``(m + A_k)⁻¹ α``: ≥ 1 means the lagged coupling fails at every Δt."""
+    return float(np.max(np.abs(np.linalg.eigvals(np.linalg.solve(mass + known_mass, alpha)))))
+
+
+def _prescribed(step: CoupledStep) -> SettingVerdict:
+    """(a): error dynamics of the reconstruction with the force prescribed, ``(m + A_k) ë +
+    B_k ė + C_k e = 0``: ``drift`` (zero eigenvalue with a Jordan block: errors grow
+    linearly), ``neutral`` (eigenvalues on the imaginary axis), ``damped`` or ``unstable``."""
+    b, c = step.known_damping, step.known_stiffness
+    lam = system_eigenvalues(step.inertia, b, c)
     tol = _re_tol(lam)
     n_drift = _drift_directions(b, c)
     max_re = float(np.max(lam.real))
@@ -223,32 +446,17 @@ def prescribed_force_stability(
         verdict = "damped"
         msg = (f"damped: errors decay (slowest rate {-max_re:.4g} 1/s, time constant "
                f"{-1.0 / max_re:.4g} s)")
-    return StabilityReport("prescribed_force", verdict, msg, eigenvalues=lam,
-                           conditions={"drift_directions": n_drift})
+    return SettingVerdict("prescribed_force", verdict, msg, eigenvalues=lam,
+                          conditions={"drift_directions": n_drift})
 
 
-# --------------------------------------------------------------------------- (b)
-def surrogate_stability(
-    mass: float | np.ndarray,
-    A_k: float | np.ndarray,
-    B_k: float | np.ndarray,
-    C_k: float | np.ndarray,
-    alpha_s: float | np.ndarray,
-    beta_s: float | np.ndarray,
-    gamma_s: float | np.ndarray,
-) -> StabilityReport:
-    """Continuous stability with a linearised state-dependent surrogate (docs/THEORY.md §4b).
-
-    ``(m + A_k − α_s) z̈ + (B_k − β_s) ż + (C_k − γ_s) z = 0``; units kg, N s/m, N/m.
-    ``verdict`` is ``"stable"`` (all Re λ < 0), ``"marginal"`` (max Re λ = 0) or
-    ``"unstable"``. ``conditions`` holds the sign conditions: the smallest eigenvalue of the
-    symmetric part of each effective matrix (``mass``, ``damping``, ``stiffness``) and whether
-    it is positive — sufficient for stability with symmetric matrices, necessary in 1 DOF.
-    """
-    n = _n_dof(mass, A_k, B_k, C_k, alpha_s, beta_s, gamma_s)
-    m, a, b, c, al, be, ga = _mats(n, mass=mass, A_k=A_k, B_k=B_k, C_k=C_k,
-                                   alpha_s=alpha_s, beta_s=beta_s, gamma_s=gamma_s)
-    m_eff, b_eff, c_eff = m + a - al, b - be, c - ga
+def _continuous(step: CoupledStep) -> SettingVerdict:
+    """(b): ``(m + A_k − α) z̈ + (B_k − β) ż + (C_k − γ) z = 0``: ``stable`` (all Re λ < 0),
+    ``marginal`` or ``unstable``; ``conditions`` the smallest eigenvalue of the symmetric part
+    of each effective matrix and whether it is positive — sufficient for stability with
+    symmetric matrices, necessary in 1 DOF."""
+    m_eff = step.inertia - step.alpha
+    b_eff, c_eff = step.known_damping - step.beta, step.known_stiffness - step.gamma
     cond = {}
     for name, mat in (("mass", m_eff), ("damping", b_eff), ("stiffness", c_eff)):
         cond[f"{name}_min_eig"] = _min_sym_eig(mat)
@@ -258,7 +466,7 @@ def surrogate_stability(
     if _is_singular(m_eff):
         msg = ("unstable: m + A_k − α_s is singular — the surrogate cancels the inertia, so the "
                "acceleration cannot be resolved (algebraic loop); keep α in the known part")
-        return StabilityReport("surrogate", "unstable", msg, eigenvalues=lam, conditions=cond)
+        return SettingVerdict("surrogate", "unstable", msg, eigenvalues=lam, conditions=cond)
     tol = _re_tol(lam)
     max_re = float(np.max(lam.real))
     detail = ("; failing sign condition(s): " + ", ".join(
@@ -270,65 +478,40 @@ def surrogate_stability(
         verdict, msg = "marginal", f"marginal: eigenvalues on the imaginary axis{detail}"
     else:
         verdict, msg = "stable", f"stable: all Re λ < 0 (slowest decay rate {-max_re:.4g} 1/s)"
-    return StabilityReport("surrogate", verdict, msg, eigenvalues=lam, conditions=cond)
+    return SettingVerdict("surrogate", verdict, msg, eigenvalues=lam, conditions=cond)
 
 
-# --------------------------------------------------------------------------- (c)
-def amplification_matrix(
-    mass: np.ndarray,
-    A_k: np.ndarray,
-    B_k: np.ndarray,
-    C_k: np.ndarray,
-    alpha_s: np.ndarray,
-    beta_s: np.ndarray,
-    gamma_s: np.ndarray,
-    dt: float,
-    scheme: str = "semi_implicit_euler",
-) -> np.ndarray:
-    """One-step map G (3n×3n) of :func:`lagged_step` on the carried state ``[z, ż, z̈_lag]``.
+def amplification_matrix(step: CoupledStep, dt: float | None = None) -> np.ndarray:
+    """One-step map G (3n×3n) of :func:`lagged_step` on the carried state ``[z, ż, z̈_lag]``
+    at ``dt`` [s] (default ``step.dt``).
 
     Built column by column by stepping unit states with the linear surrogate
-    ``F_x = α_s z̈_lag + β_s ż + γ_s z`` (all n×n matrices), so G is exactly the integrator's map.
+    ``F_x = α z̈_lag + β ż + γ z``, so G is exactly the integrator's map.
     """
-    n = mass.shape[0]
-    m_tot = mass + A_k
+    dt = step.dt if dt is None else dt
+    n = step.n_dof
+    alpha, beta, gamma = step.alpha, step.beta, step.gamma
 
     def force(t: float, z: np.ndarray, v: np.ndarray, acc: np.ndarray) -> np.ndarray:
-        return alpha_s @ acc + beta_s @ v + gamma_s @ z
+        return alpha @ acc + beta @ v + gamma @ z
 
     g = np.empty((3 * n, 3 * n))
     for k in range(3 * n):
         s = np.zeros(3 * n)
         s[k] = 1.0
         g[:, k] = np.concatenate(
-            lagged_step(scheme, 0.0, dt, s[:n], s[n:2 * n], s[2 * n:], m_tot, B_k, C_k, force)
+            lagged_step(step.scheme, 0.0, dt, s[:n], s[n:2 * n], s[2 * n:], step.inertia,
+                        step.known_damping, step.known_stiffness, force)
         )
     return g
 
 
-def _spectral_radius(*args: Any) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(amplification_matrix(*args)))))
+def _spectral_radius(step: CoupledStep, dt: float) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(amplification_matrix(step, dt)))))
 
 
-def added_mass_ratio(mass: np.ndarray, A_k: np.ndarray, alpha_s: np.ndarray) -> float:
-    """Spectral radius of ``(m + A_k)⁻¹ α_s``: ≥ 1 means the lagged coupling fails at every Δt."""
-    return float(np.max(np.abs(np.linalg.eigvals(np.linalg.solve(mass + A_k, alpha_s)))))
-
-
-def max_stable_dt(
-    mass: float | np.ndarray,
-    A_k: float | np.ndarray,
-    B_k: float | np.ndarray,
-    C_k: float | np.ndarray,
-    alpha_s: float | np.ndarray,
-    beta_s: float | np.ndarray,
-    gamma_s: float | np.ndarray,
-    scheme: str = "semi_implicit_euler",
-    *,
-    dt_range: tuple[float, float] | None = None,
-    n_grid: int = 60,
-    rtol: float = 1e-6,
-) -> float:
+def max_stable_dt(step: CoupledStep, *, dt_range: tuple[float, float] | None = None,
+                  n_grid: int = 60, rtol: float = 1e-6) -> float:
     """Largest Δt [s] such that every tested smaller Δt has spectral radius ≤ 1 (+ ``RHO_TOL``).
 
     Scans ``n_grid`` log-spaced steps over ``dt_range`` (default ``1e-4/ω`` to ``1e2/ω`` with ω
@@ -336,20 +519,17 @@ def max_stable_dt(
     then bisects the first stable→unstable bracket to relative precision ``rtol``.
     Returns ``inf`` when stable at every tested step and ``0`` when unstable at the smallest —
     always the case when ``added_mass_ratio ≥ 1`` (as Δt → 0 the map keeps the eigenvalues of
-    ``(m + A_k)⁻¹ α_s``).
+    ``(m + A_k)⁻¹ α``).
     """
-    check_scheme(scheme)
-    n = _n_dof(mass, A_k, B_k, C_k, alpha_s, beta_s, gamma_s)
-    mats = _mats(n, mass=mass, A_k=A_k, B_k=B_k, C_k=C_k,
-                 alpha_s=alpha_s, beta_s=beta_s, gamma_s=gamma_s)
-    m, a, b, c, al, be, ga = mats
-    if _is_singular(m + a):
+    if _is_singular(step.inertia):
         raise InputError("m + A_k is singular: the ODE cannot be solved for the acceleration")
-    if added_mass_ratio(m, a, al) >= 1.0:
+    if added_mass_ratio(step.mass, step.known_mass, step.alpha) >= 1.0:
         return 0.0
     if dt_range is None:
-        lam = np.concatenate([system_eigenvalues(m + a, b, c),
-                              system_eigenvalues(m + a - al, b - be, c - ga)])
+        lam = np.concatenate([
+            system_eigenvalues(step.inertia, step.known_damping, step.known_stiffness),
+            system_eigenvalues(step.inertia - step.alpha, step.known_damping - step.beta,
+                               step.known_stiffness - step.gamma)])
         lam = np.abs(lam[np.isfinite(lam)])
         omega = float(lam.max()) if lam.size and lam.max() > 0 else 1.0
         dt_range = (1e-4 / omega, 1e2 / omega)
@@ -358,7 +538,7 @@ def max_stable_dt(
         raise InputError(f"dt_range must satisfy 0 < low < high < inf, got {dt_range}")
 
     def unstable(dt: float) -> bool:
-        return _spectral_radius(*mats, dt, scheme) > 1.0 + RHO_TOL
+        return _spectral_radius(step, dt) > 1.0 + RHO_TOL
 
     grid = np.geomspace(lo, hi, n_grid)
     bad = [unstable(dt) for dt in grid]
@@ -374,35 +554,14 @@ def max_stable_dt(
     return good
 
 
-def loosely_coupled_stability(
-    mass: float | np.ndarray,
-    A_k: float | np.ndarray,
-    B_k: float | np.ndarray,
-    C_k: float | np.ndarray,
-    alpha_s: float | np.ndarray,
-    beta_s: float | np.ndarray,
-    gamma_s: float | np.ndarray,
-    dt: float,
-    scheme: str = "semi_implicit_euler",
-) -> StabilityReport:
-    """Stability of the lagged (explicit) surrogate coupling at step ``dt`` [s] (docs/THEORY.md §4c).
-
-    Uses the amplification matrix of :func:`hybridwsi.diagnostic.integrators.lagged_step`
-    (state ``[z, ż, z̈_lag]``). ``verdict``: ``"stable"`` (spectral radius < 1), ``"marginal"``
-    (= 1 within ``RHO_TOL``) or ``"unstable"``; ``max_stable_dt`` from :func:`max_stable_dt`.
-    """
-    check_scheme(scheme)
-    if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
-        raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
-    n = _n_dof(mass, A_k, B_k, C_k, alpha_s, beta_s, gamma_s)
-    mats = _mats(n, mass=mass, A_k=A_k, B_k=B_k, C_k=C_k,
-                 alpha_s=alpha_s, beta_s=beta_s, gamma_s=gamma_s)
-    if _is_singular(mats[0] + mats[1]):
-        raise InputError("m + A_k is singular: the ODE cannot be solved for the acceleration")
-    lam = np.linalg.eigvals(amplification_matrix(*mats, float(dt), scheme))
+def _loosely_coupled(step: CoupledStep, ratio: float) -> SettingVerdict:
+    """(c) at ``step.dt``: the amplification matrix of :func:`lagged_step` (state ``[z, ż,
+    z̈_lag]``): ``stable`` (spectral radius < 1), ``marginal`` (= 1 within ``RHO_TOL``) or
+    ``unstable``, with :func:`max_stable_dt`."""
+    dt, scheme = step.dt, step.scheme
+    lam = np.linalg.eigvals(amplification_matrix(step))
     rho = float(np.max(np.abs(lam)))
-    ratio = added_mass_ratio(mats[0], mats[1], mats[4])
-    dt_max = max_stable_dt(*mats, scheme)
+    dt_max = max_stable_dt(step)
     if rho > 1.0 + RHO_TOL:
         verdict = "unstable"
         msg = f"unstable at Δt = {dt:.4g} s: spectral radius {rho:.6g} > 1"
@@ -419,36 +578,14 @@ def loosely_coupled_stability(
         msg += f"; largest stable Δt ≈ {dt_max:.4g} s"
     else:
         msg += "; stable at every tested Δt"
-    return StabilityReport(
+    return SettingVerdict(
         "loosely_coupled", verdict, msg, eigenvalues=lam, spectral_radius=rho, dt=float(dt),
         scheme=scheme, max_stable_dt=dt_max, conditions={"added_mass_ratio": ratio},
     )
 
 
-# --------------------------------------------------------------------------- convenience
-def assess(
-    result: Any,
-    mass: float | np.ndarray,
-    known: Iterable[KnownComponent | str] = (),
-    dt: float | None = None,
-    scheme: str = "semi_implicit_euler",
-) -> dict[str, StabilityReport]:
-    """Settings (a), (b) and, when ``dt`` is given, (c) for a regression result.
-
-    The identified ``result.alpha, beta, gamma`` play the surrogate (α_s, β_s, γ_s); ``known``
-    gives ``(A_k, B_k, C_k)``; ``mass`` is m [kg].
-    """
-    from hybridwsi.diagnostic.regression import as_components
-
-    n = result.alpha.shape[0]
-    a, b, c = summed_linear_coefficients(as_components(known), n)
-    m = as_matrix(mass, n, "mass")
-    out = {
-        "prescribed_force": prescribed_force_stability(m, a, b, c),
-        "surrogate": surrogate_stability(m, a, b, c, result.alpha, result.beta, result.gamma),
-    }
-    if dt is not None:
-        out["loosely_coupled"] = loosely_coupled_stability(
-            m, a, b, c, result.alpha, result.beta, result.gamma, dt, scheme
-        )
-    return out
+def surrogate_stability(*matrices: float | np.ndarray) -> SettingVerdict:
+    """Setting (b) of ``CoupledStep(*matrices)`` — the positional form ``(m, A_k, B_k, C_k, α,
+    β, γ)`` kept for callers not yet moved to :func:`assess` (``report/kramer_hybrid.py``);
+    new code: ``assess(CoupledStep(...)).continuous``."""
+    return _continuous(CoupledStep(*matrices))

@@ -12,6 +12,7 @@ from hybridwsi.forces.base import (
     summed_linear_coefficients,
     total_known_force,
 )
+from hybridwsi.forces.drift import SlowDriftForce
 from hybridwsi.forces.external import ConstantForce, PrescribedForce
 from hybridwsi.forces.hydrostatics import ExactHydrostatic
 from hybridwsi.forces.linear import (
@@ -23,6 +24,7 @@ from hybridwsi.forces.linear import (
     known_from,
     parse_known,
 )
+from hybridwsi.forces.moordyn import MoorDynForce
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
 from hybridwsi.forces.morison import (MemberMorison, MorisonDrag, Strips, additional_damping,
                                      profile_strips)
@@ -34,7 +36,9 @@ __all__ = [
     "total_known_force", "REGISTRY", "AddedMass", "Hydrostatic", "LinearDamping",
     "QuadraticDamping", "known_from", "parse_known", "RadiationMemory", "ConstantForce",
     "PrescribedForce",
-    "ExactHydrostatic", "MooringForce", "MooringLines", "MooringSystem", "MooringTable",
+    "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem",
+    "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust", "rotor_from_case",
     "MemberMorison",
+    "SlowDriftForce",
 ]

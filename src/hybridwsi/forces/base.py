@@ -20,6 +20,13 @@ Optionally, ``compiled_force(n_dof)`` gives a Numba kernel of ``ode_force`` that
 solver's compiled RK4 loop calls (:mod:`hybridwsi.forces._compiled`); without one the solver
 runs its NumPy loop.
 
+A component that advances a state of its own in fixed steps (a coupled mooring code such as
+MoorDyn, a controller) defines ``begin_step(t, z, zdot, dt)``: the stepping integrators call it
+once at the start of every step, on the start-of-step state and before that step's force
+evaluations, and the component returns its force for the step from ``ode_force`` (e.g. the
+force it computed in ``begin_step``, held over the step: a lagged coupling). Such a component
+(:attr:`KnownComponent.stepped`) always runs the integrators' Python path, never a compiled loop.
+
 Subclass :class:`KnownComponent` for new physics; the built-ins live beside this module
 (:mod:`hybridwsi.forces.linear`, :mod:`hybridwsi.forces.radiation`).
 """
@@ -83,17 +90,44 @@ class KnownComponent(ABC):
         """Time derivative of the internal states (none by default)."""
         return np.zeros(0)
 
+    def begin_step(self, t: float, z: np.ndarray, zdot: np.ndarray, dt: float) -> None:
+        """Advance the component's own state to the start of a time step (default: nothing).
+
+        Called by the stepping integrators (:func:`hybridwsi.cummins.solvers.solve_rk4`, the
+        hybrid rollout's NumPy stepper) once per step, before any ``ode_force`` of that step,
+        and once more at the last output time (so that the force recorded there is the
+        component's); never by adaptive integrators (the reconstruction refuses such a
+        component).
+
+        Parameters
+        ----------
+        t : float
+            Start time of the step [s].
+        z, zdot : ndarray, shape (n_dof,)
+            Start-of-step displacement [m, rad] and velocity [m/s, rad/s] (copies).
+        dt : float
+            Step [s]: the step ends at ``t + dt``.
+        """
+
+    @property
+    def stepped(self) -> bool:
+        """True when the component overrides :meth:`begin_step` (it keeps a state of its own
+        that the integrator advances step by step: Python path only)."""
+        return type(self).begin_step is not KnownComponent.begin_step
+
     def compiled_force(self, n_dof: int) -> Any:
         """Optional Numba kernel of :meth:`ode_force` for the compiled RK4 loop, or None.
 
         Returns a :class:`hybridwsi.forces._compiled.CompiledForce` (a kernel with the same
         result as ``ode_force`` to rounding, and its data) or None, in which case the stepping
-        solver runs its NumPy path. Components with internal states return None. The default
+        solver runs its NumPy path. Components with internal states or with
+        :meth:`begin_step` return None. The default
         compiles the default ``ode_force`` (``−B ż − C z`` of :meth:`linear_coefficients`)
         when a subclass keeps it; a subclass overriding ``ode_force`` returns None unless it
         overrides this method too. None without Numba.
         """
-        if self.n_states or type(self).ode_force is not KnownComponent.ode_force:
+        if (self.n_states or self.stepped
+                or type(self).ode_force is not KnownComponent.ode_force):
             return None
         from hybridwsi.forces._compiled import linear_force  # imports Numba: only on demand
 

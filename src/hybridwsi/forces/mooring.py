@@ -21,10 +21,20 @@ Three objects, from the definition to the ODE:
   :class:`xarray.Dataset` (``table.dataset``, read back with :meth:`MooringTable.from_dataset`),
   and evaluating it needs no MoorPy.
 
-:class:`MooringForce` is the :class:`~hybridwsi.forces.base.KnownComponent` for the Cummins
-equation and the diagnostic. Its force is the mooring force MINUS the preload,
-``F(q) - F0``: the static balance ``rho g V0 - m g + F0_z = 0`` is already built into the
-equilibrium about which the linear hydrostatics ``-C q`` are written (docs/OC3_HYWIND.md).
+:class:`MooringForce` (the interpolant) and :class:`QuasiStaticMooring` (MoorPy solved at every
+call) are the :class:`~hybridwsi.forces.base.KnownComponent` s for the Cummins equation and the
+diagnostic. Their force is the mooring force MINUS the preload, ``F(q) - F0``: the static
+balance ``rho g V0 - m g + F0_z = 0`` is already built into the equilibrium about which the
+linear hydrostatics ``-C q`` are written (docs/OC3_HYWIND.md).
+
+Line tensions: a mooring component that can say them implements :class:`LineTensions`
+(``line_tensions(hist)`` -> (n_time, n_lines, 2) [N], fairlead then anchor); the case model
+records them in a TimeHistory as ``T_fairlead`` and ``T_anchor`` (dims ``time``, ``line``).
+Both components here do; a component with internal states (MoorDyn) returns what it recorded
+while the ODE ran. In the quasi-static models the anchor tension follows from the fairlead's:
+with no seabed friction the vertical force drops along the line by the weight of its suspended
+part, so ``V_anchor = max(V_fairlead - w L, 0)`` (``w`` the weight in water per unstretched
+length, ``L`` the unstretched length) and ``T = hypot(H, V)`` at either end.
 
 Conventions: ``q = (surge, sway, heave [m], roll, pitch, yaw [rad])`` of the reference point
 (OC3: the platform centreline at the still-water level); rotations as MoorPy's
@@ -39,7 +49,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import xarray as xr
@@ -264,6 +274,11 @@ class MooringSystem:
             line.staticSolve()
         return np.array(self.body.getForces(lines_only=True), dtype=float)
 
+    def tensions(self) -> np.ndarray:
+        """Fairlead and anchor tension of every line at the last position solved [N], shape
+        (n_lines, 2) (MoorPy's ``Line.TB`` and ``Line.TA``)."""
+        return np.array([[line.TB, line.TA] for line in self.moorpy.lineList], dtype=float)
+
     def force6(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Full nonlinear quasi-static mooring force at ``q``: lines plus yaw spring [N, N m]."""
         f = self.lines_force6(q)
@@ -304,6 +319,83 @@ class MooringSystem:
                                      CB=0.0, alpha=0.0, HF0=guess[0], VF0=guess[1],
                                      Tol=_TABLE_TOL, depth=lines.water_depth)
         return -float(h_b), -float(v_b)
+
+    def line_shapes(self, q: Sequence[float] | np.ndarray, n_nodes: int = 201) -> np.ndarray:
+        """Quasi-static shape of every line at the body pose ``q``: positions [m] of ``n_nodes``
+        material points equally spaced in unstretched arc length from the anchor, global
+        frame, shape (n_lines, n_nodes, 3).
+
+        The fairlead force comes from MoorPy's catenary solve (:meth:`fairlead_force`); the
+        profile is the elastic catenary with a frictionless seabed part in closed form
+        (Jonkman 2007, NREL/TP-500-41958, Eqs. 2-2/2-3; not MoorPy's node profile, whose
+        seabed and suspended branches differ by up to the seabed part's stretch at the
+        touchdown point, a jump of ~0.3 m for OC3).
+        """
+        lines = self.lines
+        q = _as_states(q)
+        r = np.array(rotation_matrix(q[3], q[4], q[5]), dtype=float)
+        s = np.linspace(0.0, lines.length, int(n_nodes))
+        w, ea = lines.weight_in_water, lines.EA
+        out = np.empty((lines.n_lines, s.size, 3))
+        for i, (anchor, fairlead) in enumerate(zip(lines.anchors, lines.fairleads)):
+            d = q[:3] + r @ fairlead - anchor
+            l_h = math.hypot(d[0], d[1])
+            h, v = self.fairlead_force(l_h, d[2])
+            v_a = v - w * lines.length  # vertical force at the anchor end (< 0: on the seabed)
+            bottom = max(0.0, -v_a / w)  # length on the seabed
+            sus = np.maximum(s - bottom, 0.0)  # suspended arc length past the touchdown point
+            v0 = max(v_a, 0.0)
+            x = (np.minimum(s, bottom) * (1.0 + h / ea)
+                 + h / w * (np.arcsinh((v0 + w * sus) / h) - np.arcsinh(v0 / h)) + h * sus / ea)
+            z = (h / w * (np.hypot(1.0, (v0 + w * sus) / h) - math.hypot(1.0, v0 / h))
+                 + (v0 * sus + 0.5 * w * sus**2) / ea)
+            u = np.array([d[0], d[1]]) / l_h
+            out[i, :, :2] = anchor[:2] + x[:, None] * u
+            out[i, :, 2] = anchor[2] + z
+        return out
+
+    def drag_dissipation(self, amplitude: Sequence[float], period: float, *, cd: float,
+                         cd_axial: float, diameter: float, n_nodes: int = 201,
+                         n_phase: int = 64, mean: Sequence[float] | None = None
+                         ) -> dict[str, float]:
+        """Energy [J] the lines' drag dissipates per cycle of the harmonic motion
+        ``q(t) = mean + amplitude sin(2π t / period)`` (6 DOFs, m and rad), by Huse's
+        quasi-static-shape method (E. Huse, "Influence of mooring line damping upon rig
+        motions", OTC 5204, 1986): every material point of a line moves as the quasi-static
+        catenary does, ``v(s, t) = ∂P(s; q)/∂q · q̇(t)``, and the Morison drag of that velocity,
+        ``½ ρ d (Cd |v_n|³ + Cd_axial π |v_t|³)`` per unit length (normal and tangential parts,
+        MoorDyn's drag formula), is integrated along the lines and over the cycle (``n_phase``
+        phases, ``n_nodes`` points per line). Valid where the line's own inertia and elastic
+        waves do not matter (periods well above the line's transverse natural periods); the
+        line's shape is re-solved at every phase, so the amplitude may be large.
+
+        Returns ``{"total", "normal", "axial"}`` [J per cycle].
+        """
+        amp = np.asarray(amplitude, dtype=float).reshape(6)
+        q0 = np.zeros(6) if mean is None else np.asarray(mean, dtype=float).reshape(6)
+        omega = 2.0 * np.pi / _positive("period", period)
+        h = 1e-4  # central-difference step along the motion direction, in units of `amplitude`
+        rho = self.lines.rho
+        normal = axial = 0.0
+        for phase in 2.0 * np.pi * np.arange(int(n_phase)) / int(n_phase):
+            q = q0 + amp * math.sin(phase)
+            shape = self.line_shapes(q, n_nodes)
+            dpdq = (self.line_shapes(q + h * amp, n_nodes)
+                    - self.line_shapes(q - h * amp, n_nodes)) / (2.0 * h)
+            v = dpdq * omega * math.cos(phase)  # velocity of each material point [m/s]
+            tangent = np.gradient(shape, axis=1)
+            ds = np.linalg.norm(tangent, axis=2)  # stretched length per node spacing [m]
+            tangent /= ds[..., None]
+            v_t = np.einsum("lnk,lnk->ln", v, tangent)
+            v_n = np.linalg.norm(v - v_t[..., None] * tangent, axis=2)
+            weights = ds.copy()
+            weights[:, [0, -1]] *= 0.5  # trapezoid along the line
+            normal += 0.5 * rho * cd * diameter * float(np.sum(weights * v_n**3))
+            axial += 0.5 * rho * cd_axial * np.pi * diameter * float(
+                np.sum(weights * np.abs(v_t)**3))
+        scale = 2.0 * np.pi / omega / int(n_phase)  # dt of the periodic trapezoid over a cycle
+        return {"total": (normal + axial) * scale, "normal": normal * scale,
+                "axial": axial * scale}
 
     def tabulate(self, ranges: Mapping[str, float] | None = None,
                  spacing: float = DEFAULT_SPACING) -> MooringTable:
@@ -590,6 +682,27 @@ class MooringTable:
         """``F0 = F(0)`` from the table [N, N m], shape (6,)."""
         return self.force6(np.zeros(6))
 
+    def tensions(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Fairlead and anchor tension of every line at ``q`` [N]: shape (n_lines, 2) for one
+        state (6,), (n, n_lines, 2) for a batch (n, 6).
+
+        The fairlead forces come from the same patches as :meth:`force6`; the anchor's
+        vertical force is ``max(V_fairlead - w L, 0)`` (module docstring).
+        """
+        from hybridwsi.forces._compiled import bicubic  # one formula with the kernel
+
+        q = _as_states(q)
+        states = np.atleast_2d(q)
+        l_h, l_v = _spans(self.lines.anchors, self.lines.fairleads, states)
+        (h0, v0), (dh, dv), (nh, nv) = self._origin, self._step, self._n
+        k, u, v = _ArrayMath.locate((l_h - h0) / dh, (l_v - v0) / dv, nh, nv)
+        cells = self._cells_array[k]
+        horizontal, vertical = bicubic(cells, 0, u, v), bicubic(cells, 16, u, v)
+        suspended_weight = self.lines.weight_in_water * self.lines.length
+        anchor_v = np.maximum(vertical - suspended_weight, 0.0)
+        out = np.stack([np.hypot(horizontal, vertical), np.hypot(horizontal, anchor_v)], axis=-1)
+        return out[0] if q.ndim == 1 else out
+
     def stiffness(self, step: Sequence[float] = (0.05, 0.05, 0.05, 1e-4, 1e-4, 1e-4)
                   ) -> np.ndarray:
         """``K = -dF/dq`` at ``q = 0`` of the interpolant (central differences), shape (6, 6)."""
@@ -599,7 +712,59 @@ class MooringTable:
         return -(f[:6] - f[6:]).T / (2.0 * h)
 
 
-class MooringForce(KnownComponent):
+@runtime_checkable
+class LineTensions(Protocol):
+    """A mooring component that reports its line tensions (the case model records them).
+
+    ``n_lines`` lines; ``line_tensions(hist)`` gives, at every sample of the history the
+    component ran in, the tension at each line's fairlead (``[..., 0]``) and anchor
+    (``[..., 1]``) [N], shape (n_time, n_lines, 2). A stateless component evaluates it on the
+    history's displacements; one with internal states (MoorDyn) returns the values it recorded
+    at those times while the ODE ran.
+    """
+
+    n_lines: int
+
+    def line_tensions(self, hist: xr.Dataset) -> np.ndarray: ...
+
+
+def _history_states(hist: xr.Dataset, dofs: tuple[str, ...], index6: list[int]) -> np.ndarray:
+    """The history's displacements as full 6-DOF states (n_time, 6); other DOFs 0."""
+    have = tuple(str(d) for d in hist["dof"].values)
+    if have != dofs:
+        raise InputError(f"mooring component DOFs {list(dofs)} differ from the history's "
+                         f"{list(have)}")
+    z = kinematic(hist, "z")
+    q = np.zeros((z.shape[0], 6))
+    q[:, index6] = z
+    return q
+
+
+class _QuasiStatic(KnownComponent):
+    """What the quasi-static mooring components share: the DOFs they act on (the others held
+    at 0), the preload ``F0`` they leave out and the stiffness ``K`` of their linear part."""
+
+    name = "mooring"
+
+    def _set_up(self, dofs: Sequence[str] | str, preload: np.ndarray,
+                stiffness: np.ndarray) -> None:
+        self.dofs = check_dofs(dofs)
+        self._index = index(self.dofs)
+        self._f0 = preload
+        self._k = stiffness
+
+    def _check(self, n_dof: int) -> None:
+        if n_dof != len(self.dofs):
+            raise InputError(f"mooring component is set up for {len(self.dofs)} DOFs "
+                             f"({', '.join(self.dofs)}), got {n_dof}")
+
+    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._check(n_dof)
+        zero = np.zeros((n_dof, n_dof))
+        return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
+
+
+class MooringForce(_QuasiStatic):
     """Quasi-static mooring as a force component: ``F(q) - F0`` on the chosen DOFs.
 
     Parameters
@@ -617,14 +782,9 @@ class MooringForce(KnownComponent):
     interpolant restricted to ``dofs`` (Eq. 5-1 sign convention); no added mass, no damping.
     """
 
-    name = "mooring"
-
     def __init__(self, table: MooringTable, dofs: Sequence[str] | str = RIGID_DOFS) -> None:
         self.table = table
-        self.dofs = check_dofs(dofs)
-        self._index = index(self.dofs)
-        self._f0 = table.preload()
-        self._k = table.stiffness()
+        self._set_up(dofs, table.preload(), table.stiffness())
 
     @classmethod
     def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None
@@ -643,29 +803,23 @@ class MooringForce(KnownComponent):
         q[..., self._index] = z
         return q
 
-    def _check(self, n_dof: int) -> None:
-        if n_dof != len(self.dofs):
-            raise InputError(f"mooring component is set up for {len(self.dofs)} DOFs "
-                             f"({', '.join(self.dofs)}), got {n_dof}")
+    @property
+    def n_lines(self) -> int:
+        return self.table.lines.n_lines
 
     def force(self, hist: xr.Dataset) -> np.ndarray:
         """``F(z) - F0`` on the history's displacements, shape (n_time, n_dof) [N, N m]."""
-        dofs = tuple(str(d) for d in hist["dof"].values)
-        if dofs != self.dofs:
-            raise InputError(f"mooring component DOFs {list(self.dofs)} differ from the "
-                             f"history's {list(dofs)}")
-        z = kinematic(hist, "z")
-        return (self.table.force6(self._full(z)) - self._f0)[:, self._index]
+        q = _history_states(hist, self.dofs, self._index)
+        return (self.table.force6(q) - self._f0)[:, self._index]
+
+    def line_tensions(self, hist: xr.Dataset) -> np.ndarray:
+        """Fairlead and anchor tensions on the history's displacements (n_time, n_lines, 2) [N]."""
+        return self.table.tensions(_history_states(hist, self.dofs, self._index))
 
     def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
         z = np.asarray(z, dtype=float)
         self._check(z.shape[-1])
         return (self.table.force6(self._full(z)) - self._f0)[..., self._index]
-
-    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        self._check(n_dof)
-        zero = np.zeros((n_dof, n_dof))
-        return zero, zero.copy(), self._k[np.ix_(self._index, self._index)]
 
     def compiled_force(self, n_dof: int) -> Any:
         """Numba kernel of :meth:`ode_force` (the table's), or None without Numba."""
@@ -677,3 +831,79 @@ class MooringForce(KnownComponent):
         return (f"mooring({self.table.lines.n_lines} lines, yaw spring "
                 f"{self.table.lines.yaw_spring:.4g} N m/rad, table {n_h}x{n_v}, "
                 f"DOFs {','.join(self.dofs)})")
+
+
+class QuasiStaticMooring(_QuasiStatic):
+    """The mooring solved by MoorPy at every call: ``F(q) - F0`` on the chosen DOFs.
+
+    What :class:`MooringForce` interpolates, without the interpolation: each call places the
+    body at ``q`` and solves every catenary statically (MoorPy warm-starts each line from its
+    previous solution, so along a trajectory this costs ~3 ms per call; OC3: ~50 x the table).
+    The other DOFs are held at 0. The last result at each time the ODE called it is kept with
+    its exact state, so that :meth:`force` and :meth:`line_tensions` on the history the ODE
+    produced do not solve again (another state at that time is solved).
+
+    Parameters
+    ----------
+    system : MooringSystem
+        The MoorPy model.
+    dofs : sequence of str
+        DOFs of the histories and ODE states this component acts on.
+    """
+
+    def __init__(self, system: MooringSystem, dofs: Sequence[str] | str = RIGID_DOFS) -> None:
+        self.system = system
+        self._set_up(dofs, system.preload(), system.stiffness())
+        self._solved: dict[int, tuple[bytes, np.ndarray, np.ndarray]] = {}
+
+    @classmethod
+    def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None
+                  ) -> QuasiStaticMooring:
+        """The case's mooring as a MoorPy system; ``dofs`` default the case's
+        ``default_dofs``."""
+        return cls(MooringSystem.from_case(case),
+                   dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS))
+
+    @property
+    def n_lines(self) -> int:
+        return self.system.lines.n_lines
+
+    def _solve(self, q: np.ndarray, t: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(F(q) - F0, tensions)`` of one state (6,); the last call at each time ``t`` is
+        kept (the stepping solver's last call at a sample time is the accepted state)."""
+        key = None if t is None else round(float(t) * 1e6)
+        kept = self._solved.get(key) if key is not None else None
+        if kept is not None and kept[0] == q.tobytes():
+            return kept[1], kept[2]
+        if not np.all(np.isfinite(q)):
+            raise SolverError("mooring: displacement is not finite")
+        force, tensions = self.system.force6(q) - self._f0, self.system.tensions()
+        if key is not None:
+            self._solved[key] = (q.tobytes(), force, tensions)
+        return force, tensions
+
+    def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
+        z = np.asarray(z, dtype=float)
+        self._check(z.shape[-1])
+        rows = z.reshape(-1, z.shape[-1])
+        q = np.zeros((rows.shape[0], 6))
+        q[:, self._index] = rows
+        f = np.stack([self._solve(row, t if rows.shape[0] == 1 else None)[0]
+                      for row in q])[:, self._index]
+        return f.reshape(z.shape)
+
+    def force(self, hist: xr.Dataset) -> np.ndarray:
+        """``F(z) - F0`` on the history's displacements, shape (n_time, n_dof) [N, N m]."""
+        q = _history_states(hist, self.dofs, self._index)
+        t = np.asarray(hist["time"].values, dtype=float)
+        return np.stack([self._solve(row, tk)[0] for row, tk in zip(q, t)])[:, self._index]
+
+    def line_tensions(self, hist: xr.Dataset) -> np.ndarray:
+        """Fairlead and anchor tensions on the history's displacements (n_time, n_lines, 2) [N]."""
+        q = _history_states(hist, self.dofs, self._index)
+        t = np.asarray(hist["time"].values, dtype=float)
+        return np.stack([self._solve(row, tk)[1] for row, tk in zip(q, t)])
+
+    def describe(self) -> str:
+        return (f"mooring_quasi_static({self.n_lines} lines, MoorPy each call, yaw spring "
+                f"{self.system.lines.yaw_spring:.4g} N m/rad, DOFs {','.join(self.dofs)})")

@@ -489,6 +489,7 @@ def read_csv(
     dof: str | Sequence[str] | None = None,
     mass: float | np.ndarray | None = None,
     resample: bool = False,
+    eta: str | None = None,
 ) -> xr.Dataset:
     """Read a TimeHistory from a delimited text file.
 
@@ -521,6 +522,10 @@ def read_csv(
     resample : bool
         Interpolate irregular sampling onto a uniform grid (cubic,
         :func:`hybridwsi.history.resample`) instead of rejecting it.
+    eta : str, optional
+        Column of the wave elevation [m, or the length unit of its header] at the body's
+        reference point, read as ``eta(time, probe)`` with the column's unit-less name as the
+        probe. Default: a column named ``eta`` when there is one (as :func:`to_csv` writes it).
 
     Units in headers (``[unit]`` or ``(unit)``) are converted to SI: time s/ms, length m/cm/mm,
     angle rad/deg, force N/kN, moment N m/kN m, ...; an unknown unit raises
@@ -536,10 +541,12 @@ def read_csv(
             found = _dof_columns(table, role, dof_names)
             if found is not None:
                 cols[role] = found
-    used = {c for cs in cols.values() for c in cs}
+    eta_col = table.require(eta, "wave-elevation column") if eta is not None else table.find("eta")
+    used = {c for cs in cols.values() for c in cs} | ({eta_col} if eta_col else set())
     named = _named_force_columns(table, forces, dof_names)
     # only the columns asked for are parsed (all of them when the forces are not named)
     table.load(table.columns if named is None else [*used, *(c for cs in named.values() for c in cs)])
+    extra_vars, extra_coords = _eta_variable(table, eta_col)
     t = table.numeric(cols["time"][0], "time")
     table.check_time(t)
     kin = {r: _read_dofs(table, c, r, dof_names) for r, c in cols.items() if r != "time"}
@@ -554,8 +561,9 @@ def read_csv(
         t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names, mass=mass,
         source=table.meta.get("source", f"csv:{table.path.name}"),
         inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
-                "sep": table.sep, **({"ignored_columns": ignored} if ignored else {})},
-        check=False,
+                "sep": table.sep, **({"eta": eta_col} if eta_col else {}),
+                **({"ignored_columns": ignored} if ignored else {})},
+        check=False, extra_vars=extra_vars, extra_coords=extra_coords,
     )
     for var, cs in extra_cols.items():
         units = [split_header(c)[1] or "" for c in cs]
@@ -570,6 +578,17 @@ def read_csv(
         warnings.warn(f"{table.path.name}: {ignored} of {len(table.columns)} columns ignored "
                       "(not the time, motion or named force columns)", UserWarning, stacklevel=2)
     return ds
+
+
+def _eta_variable(table: TextTable, column: str | None) -> tuple[dict | None, dict | None]:
+    """``eta(time, probe)`` [m] of the wave-elevation column (its unit-less name the probe),
+    as ``make_history``'s ``extra_vars`` and ``extra_coords``; ``(None, None)`` without one."""
+    if column is None:
+        return None, None
+    values = table.numeric(column, "length")[:, None]
+    return ({"eta": (("time", "probe"), values, {"units": "m", "long_name": "wave elevation",
+                                                 "column": column})},
+            {"probe": [split_header(column)[0]]})
 
 
 def _column_names(stem: str, dofs: Sequence[str]) -> list[str]:
@@ -671,6 +690,13 @@ def to_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     dof = [str(d) for d in ds["dof"].values]
     names = [n for n in ds.data_vars if ds[n].dims == ("time", "dof")]
     header, data = ["time [s]"], [np.asarray(ds["time"].values, dtype=float)]
+    if "eta" in ds:  # one probe: the column read_csv takes as the wave elevation
+        eta = np.asarray(ds["eta"].values, dtype=float).reshape(ds.sizes["time"], -1)
+        if eta.shape[1] != 1:
+            raise InputError(f"a CSV history holds one wave-elevation column; this history "
+                             f"has {eta.shape[1]} probes (write NetCDF instead)")
+        header.append("eta [m]")
+        data.append(eta[:, 0] * unit_factor(ds["eta"].attrs.get("units"), "length", "eta"))
     for n in names:
         values = np.asarray(ds[n].values, dtype=float)
         for j, (col, unit) in enumerate(zip(_column_names(str(n), dof), units_per_dof(ds, n))):

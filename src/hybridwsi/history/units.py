@@ -281,3 +281,75 @@ def check_si(ds: xr.Dataset) -> None:
                 f"'{name}' is in {unit}, not SI: read the file with "
                 "hybridwsi.importers.read_history or convert with hybridwsi.history.to_si"
             )
+
+
+# --------------------------------------------------------------------------------------------
+# Units of parameters (case files): a general product/quotient of SI-derived tokens
+# --------------------------------------------------------------------------------------------
+
+#: base dimensions of :func:`parse_unit`: mass, length, time and plane angle (kept apart from
+#: a pure number so that N m and N m/rad are not confused)
+BASE_DIMENSIONS = ("kg", "m", "s", "rad")
+#: unit token -> (factor to the base units, exponents of :data:`BASE_DIMENSIONS`);
+#: case-sensitive (``MN`` mega-newton, ``m`` metre)
+UNIT_TOKENS: dict[str, tuple[float, tuple[int, int, int, int]]] = {
+    "kg": (1.0, (1, 0, 0, 0)), "g": (1e-3, (1, 0, 0, 0)), "t": (1e3, (1, 0, 0, 0)),
+    **{u: (f, (0, 1, 0, 0)) for u, f in _LENGTH.items()},
+    **{u: (f, (0, 0, 1, 0)) for u, f in _TIME.items()},
+    "N": (1.0, (1, 1, -2, 0)), "kN": (1e3, (1, 1, -2, 0)), "MN": (1e6, (1, 1, -2, 0)),
+    "Pa": (1.0, (1, -1, -2, 0)), "kPa": (1e3, (1, -1, -2, 0)), "MPa": (1e6, (1, -1, -2, 0)),
+    "GPa": (1e9, (1, -1, -2, 0)),
+    "rad": (1.0, (0, 0, 0, 1)), "deg": (math.pi / 180.0, (0, 0, 0, 1)),
+    "Hz": (1.0, (0, 0, -1, 0)),
+}
+_DIMENSIONLESS_UNITS = {"", "1", "-"}
+_TERM = re.compile(r"^([A-Za-z]+)(?:(?:\^|\*\*)?(-?\d+)|([²³]))?$")
+
+
+def _unit_terms(text: str, sign: int, out: list[tuple[float, tuple[int, ...]]]) -> None:
+    for term in re.split(r"[\s*·.]+", text.strip()):
+        if not term:
+            continue
+        m = _TERM.match(term)
+        if m is None or m.group(1) not in UNIT_TOKENS:
+            raise InputError(f"unknown unit {term!r} (known: {', '.join(UNIT_TOKENS)})")
+        power = int(m.group(2)) if m.group(2) else {"²": 2, "³": 3}.get(m.group(3) or "", 1)
+        factor, dims = UNIT_TOKENS[m.group(1)]
+        out.append((factor ** (sign * power), tuple(sign * power * d for d in dims)))
+
+
+@lru_cache(maxsize=512)
+def parse_unit(text: str) -> tuple[float, tuple[int, ...]]:
+    """``(factor to base units, exponents over BASE_DIMENSIONS)`` of a unit expression.
+
+    Products of the tokens of :data:`UNIT_TOKENS` separated by spaces, ``*``, ``·`` or ``.``,
+    with integer powers (``m^2``, ``m**2``, ``m²``, ``s^-2``) and one ``/`` after which every
+    term is in the denominator: ``"kg/m^3"``, ``"N s/m"``, ``"N m s/rad"``, ``"kg m^2"``.
+    ``""``, ``"1"`` and ``"-"`` are dimensionless. Raises :class:`InputError` for anything else.
+    """
+    if text.strip() in _DIMENSIONLESS_UNITS:
+        return 1.0, (0, 0, 0, 0)
+    num, slash, den = text.partition("/")
+    if "/" in den:
+        raise InputError(f"unit {text!r}: write at most one '/' (e.g. 'm/s^2', 'N s/m')")
+    terms: list[tuple[float, tuple[int, ...]]] = []
+    _unit_terms(num, 1, terms)
+    if slash:
+        if not den.strip():
+            raise InputError(f"unit {text!r} has nothing after '/'")
+        _unit_terms(den, -1, terms)
+    factor, dims = 1.0, (0, 0, 0, 0)
+    for f, d in terms:
+        factor *= f
+        dims = tuple(a + b for a, b in zip(dims, d))
+    return factor, dims
+
+
+def convert_unit(value: float, unit: str, to: str) -> float:
+    """``value`` in ``unit`` expressed in ``to`` (:func:`parse_unit` expressions), or an
+    :class:`InputError` when the two measure different quantities (``"320 s"`` as a depth)."""
+    f_from, d_from = parse_unit(unit)
+    f_to, d_to = parse_unit(to)
+    if d_from != d_to:
+        raise InputError(f"unit '{unit}' is not a unit of {to or 'a pure number'}")
+    return value * f_from / f_to

@@ -108,17 +108,6 @@ def paper_coefficients() -> xr.Dataset:
     return read_netcdf(PAPER_COEFFS)
 
 
-def case_coefficients(case: dict[str, Any], cache_dir: str | Path | None = None) -> xr.Dataset:
-    """A case's coefficient Dataset: :func:`compute` on its ``[bem]`` table
-    (``cases.bem_arguments``), which returns the shipped file without solving when the inputs
-    match (OC3-Hywind: ``bem_oc3_hywind.nc``); ``cache_dir`` as in :func:`compute`."""
-    from hybridwsi.cases import bem_arguments
-
-    with warnings.catch_warnings():  # Capytaine's chatter on loading
-        warnings.simplefilter("ignore")
-        return compute(**bem_arguments(case), cache_dir=cache_dir, progress=False)
-
-
 def _shipped(input_hash: str) -> xr.Dataset | None:
     """A coefficient file shipped in ``hybridwsi/data/bem_*.nc`` made with exactly these inputs
     (the hash of a whole plan or of one of its finite-depth/deep-water parts).

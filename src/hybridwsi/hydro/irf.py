@@ -260,14 +260,16 @@ def damping_from_irf(K: xr.DataArray, omega: np.ndarray) -> xr.DataArray:
     return _like_coeffs(filon_linear(t, k, omega, "cos"), omega, K).rename("radiation_damping")
 
 
-def added_mass_from_irf(K: xr.DataArray, omega: np.ndarray, A_inf: Any) -> xr.DataArray:
-    """Ogilvie (1964): ``A(ω) = A∞ - (1/ω) ∫_0^T K(t) sin ωt dt`` [kg]."""
+def added_mass_from_irf(K: xr.DataArray, omega: np.ndarray, added_mass_inf: Any
+                        ) -> xr.DataArray:
+    """Ogilvie (1964): ``A(ω) = A∞ - (1/ω) ∫_0^T K(t) sin ωt dt`` [kg, per DOF pair];
+    ``added_mass_inf`` is A∞ (an array or the coefficients' DataArray)."""
     t, k = _kernel_arrays(K)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     if np.any(omega <= 0):
         raise InputError("omega must be > 0 for the Ogilvie relation")
-    a_inf = np.asarray(getattr(A_inf, "values", A_inf), dtype=float)
-    a = a_inf[None] - filon_linear(t, k, omega, "sin") / omega.reshape(-1, *(1,) * (k.ndim - 1))
+    added_mass_inf = np.asarray(getattr(added_mass_inf, "values", added_mass_inf), dtype=float)
+    a = added_mass_inf[None] - filon_linear(t, k, omega, "sin") / omega.reshape(-1, *(1,) * (k.ndim - 1))
     return _like_coeffs(a, omega, K).rename("added_mass")
 
 
@@ -285,9 +287,9 @@ def ogilvie_check(coeffs: xr.Dataset, K: xr.DataArray, *, band: tuple[float, flo
     a = coeffs["added_mass"].transpose("omega", *PAIR)
     w = np.asarray(a["omega"].values, dtype=float)
     est = a.values + filon_linear(t, k, w, "sin") / w.reshape(-1, 1, 1)
-    a_inf = coeffs["added_mass_inf"].transpose(*PAIR).values
-    scale = np.abs(a_inf).max()
-    dev = (est - a_inf[None]) / scale
+    added_mass_inf = coeffs["added_mass_inf"].transpose(*PAIR).values
+    scale = np.abs(added_mass_inf).max()
+    dev = (est - added_mass_inf[None]) / scale
     sel = np.ones(w.size, bool) if band is None else (w >= band[0]) & (w <= band[1])
     ds = xr.Dataset({"added_mass_inf_estimate": (("omega", *PAIR), est, {"units": "kg"}),
                      "relative_deviation": (("omega", *PAIR), dev)},
@@ -295,7 +297,7 @@ def ogilvie_check(coeffs: xr.Dataset, K: xr.DataArray, *, band: tuple[float, flo
                             "influenced_dof": a["influenced_dof"].values})
     ds.attrs = {"max_relative_deviation": float(np.abs(dev[sel]).max()),
                 "median_estimate": float(np.median(est[sel][..., 0, 0]) if est.shape[1] else 0.0),
-                "added_mass_inf": float(a_inf.ravel()[0])}
+                "added_mass_inf": float(added_mass_inf.ravel()[0])}
     return ds
 
 

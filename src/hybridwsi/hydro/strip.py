@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -116,16 +115,3 @@ def case_elements(case: Mapping[str, Any]) -> MemberElements:
         raise InputError("case has no [[body.hull.members]]") from None
     length = case.get("morison", {}).get("element_length", DEFAULT_ELEMENT_LENGTH)
     return member_elements(members, float(length))
-
-
-def case_hydrodynamics(case: Mapping[str, Any], table: str = "bem",
-                       cache_dir: Any = None) -> xr.Dataset:
-    """A case's coefficients: the BEM (:func:`hybridwsi.hydro.bem.compute` on ``[table]``:
-    the shipped file when the inputs match) plus its slender members by strip theory."""
-    from hybridwsi.cases import bem_arguments  # cases builds bodies: imported on use
-    from hybridwsi.hydro import bem
-
-    with warnings.catch_warnings():  # Capytaine's chatter on loading; flags stay in attrs
-        warnings.simplefilter("ignore")
-        coeffs = bem.compute(**bem_arguments(case, table), cache_dir=cache_dir, progress=False)
-    return with_slender_members(coeffs, case_elements(case))

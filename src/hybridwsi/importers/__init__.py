@@ -61,6 +61,7 @@ from hybridwsi.importers.dualsphysics import (
     read_dualsphysics_floatingace,
     read_dualsphysics_floatinginfo,
 )
+from hybridwsi.importers.elevation import read_elevation
 from hybridwsi.importers.kramer import (
     KRAMER_DIAMETER,
     KRAMER_DROPS,
@@ -227,6 +228,7 @@ __all__ = [
     "kramer_numerical_files",
     "read_dualsphysics_floatingace",
     "read_dualsphysics_floatinginfo",
+    "read_elevation",
     "read_history",
     "read_kramer_decay",
     "read_kramer_drop",

@@ -23,9 +23,10 @@ Channels (names case-insensitive; a leading ``-`` in a name, OpenFAST's sign fli
   including the buoyancy rho g V0 in heave), ``F_rad_mem`` (``B1RdtFxi``..., radiation
   memory) and ``F_add`` (``B1AddFxi``..., HydroDyn's additional preload, stiffness and damping);
   ``F_tot = M zddot`` when a mass is given and the accelerations are in the file;
-- other variables: ``fairlead_tension(time, line)`` and ``anchor_tension(time, line)`` [N]
-  from the mooring module's ``FAIRTEN<n>``/``ANCHTEN<n>``, ``eta(time, probe)`` [m] from
-  ``Wave<n>Elev``.
+- other variables: ``T_fairlead(time, line)`` and ``T_anchor(time, line)`` [N] from the
+  mooring module's ``FAIRTEN<n>``/``ANCHTEN<n>`` (the names every mooring model of hybridwsi
+  records), ``eta(time, probe)`` [m] from ``Wave<n>Elev`` (every probe; ``eta="Wave2Elev"``:
+  that channel alone, any length channel may be named).
 
 Velocities or accelerations not in the file (for some selected DOF) are estimated from ``z``
 (:func:`hybridwsi.history.estimate_derivatives`) and say so in ``attrs["estimated"]``.
@@ -80,8 +81,8 @@ FORCE_CHANNELS: dict[str, tuple[str, str]] = {
 }
 #: numbered channels kept as extra variables: variable -> (name regex, dim, quantity, units)
 SERIES_CHANNELS: dict[str, tuple[str, str, str, str]] = {
-    "fairlead_tension": (r"FAIRTEN(\d+)", "line", "force", "N"),
-    "anchor_tension": (r"ANCHTEN(\d+)", "line", "force", "N"),
+    "T_fairlead": (r"FAIRTEN(\d+)", "line", "force", "N"),
+    "T_anchor": (r"ANCHTEN(\d+)", "line", "force", "N"),
     "eta": (r"WAVE(\d+)ELEV", "probe", "length", "m"),
 }
 
@@ -305,10 +306,21 @@ def _forces(ch: OpenFASTChannels, dofs: Sequence[str]
     return values, used, notes
 
 
-def _series(ch: OpenFASTChannels) -> dict[str, tuple]:
-    """Numbered channels (fairlead tensions, wave elevations) as extra variables."""
+def _series(ch: OpenFASTChannels, eta: str | None = None) -> dict[str, tuple]:
+    """Numbered channels (fairlead tensions, wave elevations) as extra variables; ``eta``:
+    the one channel read as the wave elevation instead of every ``Wave<n>Elev``."""
     out = {}
+    if eta is not None:
+        found = ch.find([eta])
+        if found is None:
+            raise InputError(f"{ch.path.name}: no wave-elevation channel '{eta}' (channels: "
+                             f"{', '.join(ch.names[:12])}{' ...' if len(ch.names) > 12 else ''})")
+        out["eta"] = ((("time", "probe"), ch.si(*found, "length")[:, None],
+                       {"units": "m", "channels": ch.names[found[0]]}),
+                      ("probe", [ch.names[found[0]]]))
     for var, (regex, dim, quantity, units) in SERIES_CHANNELS.items():
+        if var in out:
+            continue
         hits = sorted((int(m.group(1)), col) for key, col in ch.lookup.items()
                       if (m := re.fullmatch(regex, key)))
         if hits:
@@ -390,6 +402,7 @@ def read_openfast(
     *,
     resample: bool = False,
     require_uniform: bool = True,
+    eta: str | None = None,
 ) -> xr.Dataset:
     """Platform motion and loads of an OpenFAST run (``.out`` or ``.outb``) as a TimeHistory.
 
@@ -407,6 +420,9 @@ def read_openfast(
         ``F_tot = M zddot`` is added (the total external force on a rigid platform).
     resample, require_uniform : bool
         Irregular time (variable-step output): see :mod:`hybridwsi.importers`.
+    eta : str, optional
+        The channel of the wave elevation (e.g. ``"Wave1Elev"``, unit from the file); default
+        every ``Wave<n>Elev`` channel, one probe each.
 
     Returns
     -------
@@ -447,7 +463,7 @@ def read_openfast(
                          "the mass matrix")
         else:
             forces["F_tot"] = f_tot
-    series = _series(ch)
+    series = _series(ch, eta)
     ds = make_history(
         t, kin["z"], kin.get("zdot"), kin.get("zddot"), forces, dof=dofs, mass=mass,
         source=f"openfast:{ch.path.name}",

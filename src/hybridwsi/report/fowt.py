@@ -33,19 +33,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from hybridwsi.casemodel import case_coefficients, linear_components, mooring_component
 from hybridwsi.cases import load_case
 from hybridwsi.cummins import simulate
 from hybridwsi.dofs import RIGID_DOFS, index, motion_unit
 from hybridwsi.files import atomic_write
-from hybridwsi.forces import (
-    Hydrostatic,
-    KnownComponent,
-    MooringForce,
-    MooringSystem,
-    additional_damping,
-)
+from hybridwsi.forces import KnownComponent, MooringSystem
 from hybridwsi.history import mean_crossing_period
-from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
 from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
@@ -64,9 +58,10 @@ RAO_HEIGHT = 1.0  # m: linear system, the height only scales the response
 
 def oc3_coefficients(case: dict[str, Any] | None = None, cache_dir: Path | None = None
                      ) -> xr.Dataset:
-    """The OC3-Hywind coefficients (:func:`hybridwsi.hydro.bem.case_coefficients`: the shipped
+    """The OC3-Hywind coefficients (:func:`hybridwsi.casemodel.case_coefficients`: the shipped
     file when the inputs match)."""
-    return bem.case_coefficients(load_case("oc3_hywind") if case is None else case, cache_dir)
+    return case_coefficients(load_case("oc3_hywind") if case is None else case,
+                             cache_dir=cache_dir)
 
 
 def mooring_summary(case: dict[str, Any], system: MooringSystem | None = None
@@ -88,14 +83,6 @@ def mooring_summary(case: dict[str, Any], system: MooringSystem | None = None
                       "source": "Jonkman 2010 (NREL/TP-500-47535) Eq. 5-3 and Eq. 5-2; lines "
                                 "only (add the yaw spring 9.834e7 N m/rad to K66)"},
     }
-
-
-def linear_forces(case: dict[str, Any], stiffness: np.ndarray,
-                  dofs: Sequence[str] = DOFS) -> list[KnownComponent]:
-    """The linearised mooring (−K z on ``dofs``) and the additional linear damping."""
-    idx = index(dofs)
-    return [Hydrostatic(np.asarray(stiffness)[np.ix_(idx, idx)]),
-            additional_damping(case, dofs)]
 
 
 def modal_summary(coeffs: xr.Dataset, stiffness: np.ndarray, dofs: Sequence[str] = DOFS
@@ -305,12 +292,12 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False,
     k3 = k6[np.ix_(idx, idx)]
     log("mooring.json")
 
-    forces = linear_forces(case, k6)
+    forces = linear_components(case, DOFS, stiffness=k6)  # [-K z, additional damping]
     modal = modal_summary(coeffs, k6)
     decays = decay_histories(coeffs, forces, quick=quick)
     # the same decays with the tabulated nonlinear mooring: the offsets are small enough
     # that it gives the linearised frequencies (a check on "small offsets keep it linear")
-    tabulated = decay_histories(coeffs, [MooringForce.from_case(case, DOFS), forces[1]],
+    tabulated = decay_histories(coeffs, [mooring_component(case, DOFS, "table"), forces[1]],
                                 quick=quick)
     refs = case["reference_natural_frequencies"]
     nat = {d.lower(): {"hz": modal[d], "reference_hz": float(refs[d.lower()]),
@@ -339,7 +326,7 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False,
     ds.to_netcdf(folder / "rao.nc")
     log("RAOs")
     hybrid_md = run_fowt_hybrid(folder, case, coeffs,
-                                *linear_forces(case, k6, case["hybrid"]["dofs"]),
+                                *linear_components(case, case["hybrid"]["dofs"], stiffness=k6),
                                 write_json=_write_json, quick=quick, log=log) if hybrid else ""
     return fowt_markdown(mooring, nat, points, time.time() - start, hybrid_md)
 

@@ -193,11 +193,9 @@ def partition_entry(name: str, hist: xr.Dataset, known: Sequence[KnownComponent]
         warnings.simplefilter("ignore")
         regs = [regress(hist, "F_tot", list(known), force_accuracy=acc) for acc in accuracies]
     reg = regs[0]
-    m = rigid_mass(hist)
-    a_k, b_k, c_k = summed_linear_coefficients(list(known), len(dofs))
-    lag = stability.loosely_coupled_stability(m, a_k, b_k, c_k, reg.alpha, reg.beta, reg.gamma,
-                                              dt, scheme)
-    ratio = stability.added_mass_ratio(m, a_k, reg.alpha)
+    rep = stability.assess(stability.CoupledStep.from_components(
+        rigid_mass(hist), list(known), reg, dt=dt, scheme=scheme))
+    lag, ratio = rep.loosely_coupled, rep.added_mass_ratio
     out: dict[str, Any] = {
         "partition": name,
         "known": [k.describe() for k in known],

@@ -210,7 +210,7 @@ def run_fowt_hybrid(folder: Path, case: Mapping[str, Any], coeffs: xr.Dataset,
     Markdown tables.
 
     ``mooring_linear`` is −K q on ``[hybrid] dofs`` (MoorPy's K), ``damping`` the additional
-    linear damping (``report.fowt.linear_forces``).
+    linear damping (:func:`hybridwsi.casemodel.linear_components`).
     """
     import torch
 

@@ -5,7 +5,7 @@ Everything comes from the case (``load_case("oc4_semi")``):
 
 - coefficients: the shipped Capytaine solution of the columns and heave plates
   (``bem_oc4_semi.nc``, taken without solving when the inputs match) plus the slender
-  members' Morison inertia (:func:`hybridwsi.hydro.strip.case_hydrodynamics`);
+  members' Morison inertia (:func:`hybridwsi.casemodel.case_coefficients`);
 - mooring: MoorPy's linearised stiffness K = −∂F/∂q of the three catenary lines;
 - viscous damping: the members' Morison drag (columns, heave plates axially, pontoons, braces)
   linearised by energy equivalence (Borgman) at the velocity amplitudes of ``[linear_drag]``,
@@ -29,22 +29,20 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from hybridwsi.cases import load_case
+from hybridwsi.casemodel import case_coefficients, radiation_ss
+from hybridwsi.cases import Case, load_case
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
 from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberMorison, \
     MooringSystem
 from hybridwsi.hydro.modal import Mode, natural_frequencies
-from hybridwsi.hydro.strip import case_hydrodynamics
 from hybridwsi.report.fowt import decay_frequency, decay_histories, rao_curve, rao_point
 
 #: initial offsets of the free decays [m, m, m, rad, rad, rad]: small (linear mooring)
 SEMI_DECAY_OFFSET = {"Surge": 5.0, "Sway": 5.0, "Heave": 1.0, "Roll": 0.02, "Pitch": 0.02,
                      "Yaw": 0.05}
-#: radiation kernel length [s], its sampling step [s] and the largest state-space order
-RADIATION_T_MAX = 40.0
+#: the solver step the radiation model is fitted for [s] (unused by a [radiation] table)
 RADIATION_DT = 0.25
-RADIATION_MAX_ORDER = 60
 #: decay durations [s]: about 8 periods of each mode
 SEMI_DECAY_DURATION = {"Surge": 900.0, "Sway": 900.0, "Heave": 150.0, "Roll": 220.0,
                        "Pitch": 220.0, "Yaw": 650.0}
@@ -103,30 +101,26 @@ def linearised_drag(case: Mapping[str, Any], amplitudes: Mapping[str, float] | N
     return total
 
 
-def radiation_state_space(coeffs: xr.Dataset, *, t_max: float = RADIATION_T_MAX,
-                          tol: float = 0.003, max_order: int = RADIATION_MAX_ORDER):
-    """The radiation kernel K(t) up to ``t_max`` [s] realised as a state space of at most
-    ``max_order`` states with a relative time error below ``tol``.
+def radiation_state_space(case: Mapping[str, Any], coeffs: xr.Dataset):
+    """The case's radiation state space (``[radiation]``, :func:`hybridwsi.casemodel.
+    radiation_ss`) on the six DOFs.
 
-    The semi's kernel rings longer than the default 30 s horizon (the columns' interaction
-    makes B(ω) peaked near 1.1 rad/s) and needs more states than the default 20: with them
-    the fit error is 2 % in time and 3 % against the BEM's B(ω); with 60 s and up to 60
-    states 0.45 % and 1.4 % (docs/OC4_SEMI.md)."""
-    from hybridwsi.hydro.irf import radiation_irf
-    from hybridwsi.hydro.statespace import fit_radiation_ss
-
-    kernel = radiation_irf(coeffs, dt=RADIATION_DT, t_max=t_max)
-    return fit_radiation_ss(kernel, tol=tol, max_order=max_order, coeffs=coeffs, balance=True)
+    The default fit (a 30 s kernel, up to 20 states, the 6×6 kernel weighed by its largest
+    entries) loses the semi's heave radiation and makes the coupled system unstable; the
+    case's (40 s, up to 60 states, balanced) keeps B(ω) within 1.8 % RMS of the BEM's and the
+    system stable (docs/OC4_SEMI.md)."""
+    return radiation_ss(coeffs, RIGID_DOFS, None, RADIATION_DT, case.get("radiation"))
 
 
-def semi_system(case: Mapping[str, Any] | None = None, table: str = "bem",
+def semi_system(case: Case | None = None, table: str = "bem",
                 cache_dir: Any = None) -> SemiSystem:
     """Coefficients (``[table]``: ``"bem"`` shipped, ``"bem_quick"`` coarse), MoorPy stiffness,
     linearised drag and radiation state space of the case (default ``oc4_semi``)."""
     case = load_case("oc4_semi") if case is None else case
-    coeffs = case_hydrodynamics(case, table, cache_dir)
+    coeffs = case_coefficients(case, quick=table == "bem_quick", cache_dir=cache_dir)
     return SemiSystem(coeffs=coeffs, mooring=MooringSystem.from_case(case).stiffness(),
-                      drag=linearised_drag(case), radiation_ss=radiation_state_space(coeffs))
+                      drag=linearised_drag(case),
+                      radiation_ss=radiation_state_space(case, coeffs))
 
 
 def semi_modes(system: SemiSystem) -> list[Mode]:

@@ -146,7 +146,7 @@ def report_markdown(summary: dict, table_md: str, note: str, sph_note: str, fig2
         "",
         f"hybridwsi {summary['hybridwsi_version']}; "
         f"{'quick (coarse mesh)' if summary['quick'] else 'paper'} BEM configuration: "
-        f"{bem['n_panels']} panels, {bem['n_omega']} frequencies; A∞ = {bem['A_inf']:.4f} kg, "
+        f"{bem['n_panels']} panels, {bem['n_omega']} frequencies; A∞ = {bem['added_mass_inf']:.4f} kg, "
         f"C = {bem['C']:.2f} N/m. Wall time {summary['wall_time_s']:.0f} s.",
         "",
         "## Table 1: force sensitivities F_bb ≈ F̄ + α z̈ + β ż + γ z",

@@ -123,8 +123,8 @@ def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dic
     coefficients (:func:`hybridwsi.forces.linear.known_from`, the one route)."""
     from hybridwsi.forces.linear import known_from
 
-    hydrostatic, a_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
-    return {"1": [], "2": [hydrostatic], "3": [hydrostatic, a_inf]}
+    hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
+    return {"1": [], "2": [hydrostatic], "3": [hydrostatic, added_mass_inf]}
 
 
 def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
@@ -137,6 +137,12 @@ def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
                                                    force_accuracy=force_accuracy), known)
         for k, known in partitions.items()
     }
+
+
+def _solved(res: Any) -> Any:
+    """A reconstruction that succeeded (its failure, data until here, stops the report)."""
+    res.solution.raise_on_failure()
+    return res
 
 
 def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Path,
@@ -174,15 +180,15 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     biased = hist.assign(F_tot=hist["F_tot"] + bias)
     recs, moved, verdicts, metrics = {}, {}, {}, {}
     for k, case in cases.items():
-        r = reconstruct(hist, force="F_tot", known=case.known, mass=mass)
-        rb = reconstruct(biased, force="F_tot", known=case.known, mass=mass)
-        recs[k], verdicts[k] = rb.history, r.stability.verdict
+        r = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass))
+        rb = _solved(reconstruct(biased, force="F_tot", known=case.known, mass=mass))
+        recs[k], verdicts[k] = rb.history, r.stability.prescribed.verdict
         metrics[k] = {"prescribed": r.to_dict(), "prescribed_biased": rb.to_dict()}
         if ident is not None:
-            rm = reconstruct(hist, force="F_tot", known=case.known, mass=mass,
-                             move_identified=ident)
-            rmb = reconstruct(biased, force="F_tot", known=case.known, mass=mass,
-                              move_identified=ident)
+            rm = _solved(reconstruct(hist, force="F_tot", known=case.known, mass=mass,
+                                     move_identified=ident))
+            rmb = _solved(reconstruct(biased, force="F_tot", known=case.known, mass=mass,
+                                      move_identified=ident))
             moved[k] = rmb.history
             metrics[k]["moved_identified"] = rm.to_dict()
             metrics[k]["moved_identified_biased"] = rmb.to_dict()
@@ -508,7 +514,7 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
         "hybridwsi_version": version(),
         "quick": quick,
         "bem": {"n_panels": cfg["n_panels"], "n_omega": cfg["n_omega"],
-                "A_inf": _coefficient(coeffs, "added_mass_inf"),
+                "added_mass_inf": _coefficient(coeffs, "added_mass_inf"),
                 "C": _coefficient(coeffs, "hydrostatic_stiffness")},
         "wall_time_s": time.perf_counter() - t0,
     }

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import cummins, waves
 from hybridwsi.errors import InputError
 
 from hybridwsi.forces import KnownComponent
@@ -41,14 +42,14 @@ def partitions(coeffs: xr.Dataset | None,
     C and A∞ come from ``hist`` when it carries them, else from ``coeffs`` restricted to the
     history's DOFs (all of the coefficients' DOFs without a history).
     """
-    hydrostatic, a_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
+    hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
     return {
         "added_mass_to_network": {
             "known": [hydrostatic, PrescribedForce("F_exc")],
             "inputs": ("zdot", "zddot"),
         },
         "recommended": {
-            "known": [hydrostatic, a_inf, PrescribedForce("F_exc")],
+            "known": [hydrostatic, added_mass_inf, PrescribedForce("F_exc")],
             "inputs": ("zdot",),
         },
     }
@@ -69,8 +70,6 @@ def make_histories(coeffs: xr.Dataset, mass: float, seeds: Sequence[int], *, hs:
     ``radiation_ss`` (a :class:`~hybridwsi.hydro.statespace.RadiationSS`) skips the
     state-space fit of the radiation kernel, which does not depend on the mass or the sea.
     """
-    from hybridwsi import cummins, waves
-
     if radiation_ss is None:
         radiation_ss = cummins.build_system(coeffs, mass=mass, dt=dt).ss
     return [cummins.simulate(coeffs, mass=mass, duration=duration, dt=dt, ramp=2.0,
@@ -121,12 +120,12 @@ def evaluate_partition(
         "mode": mode,
         "corrections": n_corr if mode == "corrected" else 0,
         "r2_held_out": float(np.mean([net.score(h, "F_bb", known=known) for h in test])),
-        "alpha_s": float(pred.alpha_s[0, 0]),
-        "beta_s": float(pred.beta_s[0, 0]),
-        "gamma_s": float(pred.gamma_s[0, 0]),
+        "alpha_s": float(pred.step.alpha[0, 0]),
+        "beta_s": float(pred.step.beta[0, 0]),
+        "gamma_s": float(pred.step.gamma[0, 0]),
         "added_mass_ratio": pred.added_mass_ratio,
         "spectral_radius": pred.spectral_radius,
-        "theory_loosely_coupled": pred.theory.get("loosely_coupled", {}).get("verdict"),
+        "theory_loosely_coupled": pred.loosely_coupled.verdict,
         "predicted_stable": bool(pred.stable),
         "observed_stable": bool(not res.blew_up.any()),
         "held_out_rms_error_z": [float(e) for e in res.errors(test)],
@@ -184,9 +183,7 @@ def hybrid_demo(
     network force (~10 % of rms z at dt = 0.02 s, first order in dt) and the Newmark step
     (~2 % at dt = 0.02 s, second order), not the network; hence ``corrected`` at dt = 0.01 s.
     """
-    import torch
-
-    from hybridwsi import cummins
+    import torch  # optional dependency: only the demo's training needs it
 
     torch.set_num_threads(1)  # tiny networks: threads only add overhead on a shared machine
     m0 = _one_dof(mass_from(None, coeffs), "mass")
@@ -209,7 +206,8 @@ def hybrid_demo(
         rows = [evaluate_partition(name, part, train, test, mass, net_kw=net_kw,
                                    long_case=long_case, mode=mode)
                 for name, part in partitions(coeffs).items()]
-        a_inf = _one_dof(matrix_from(None, coeffs, "added_mass_inf"), "added_mass_inf")
-        report["bodies"][body] = {"mass": mass, "added_mass_inf": a_inf, "partitions": rows}
+        added_mass_inf = _one_dof(matrix_from(None, coeffs, "added_mass_inf"), "added_mass_inf")
+        report["bodies"][body] = {"mass": mass, "added_mass_inf": added_mass_inf,
+                                  "partitions": rows}
     report["all_agree"] = all(r["agree"] for b in report["bodies"].values() for r in b["partitions"])
     return report

@@ -8,10 +8,10 @@ A tiny network evaluated once or twice per time step is dominated by per-call ov
 - :func:`numpy_forward` evaluates them in NumPy (the same arithmetic as
   :meth:`ForceNetwork.forward` up to rounding, ~1e-15 relative);
 - :func:`run_explicit` runs the whole ``lagged``/``corrected`` rollout of
-  :mod:`hybridwsi.surrogate.rollout` in one Numba-compiled loop (when Numba is installed):
+  :mod:`hybridwsi.surrogate.coupled` in one Numba-compiled loop (when Numba is installed):
   preallocated scratch vectors, the feature window as a ring buffer, the trapezoidal
   radiation-state update as precomputed transition matrices, no allocation per step.
-  It runs the arithmetic of ``rollout._Stepper._lagged`` (tests compare both to 1e-12).
+  It runs the arithmetic of ``coupled.CoupledStepper._lagged`` (tests compare both to 1e-12).
 
 Without Numba, :data:`HAVE_NUMBA` is False and the rollout uses its NumPy stepper.
 """
