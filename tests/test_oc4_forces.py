@@ -230,3 +230,20 @@ def test_vertical_balance_with_the_mooring(mooring):
     residual = (RHO * body.displaced_volume() - body.mass) * body.g + f0[2]
     assert abs(residual) < 1e-3 * body.mass * body.g
     assert np.allclose(f0[[0, 1, 3, 4, 5]], 0.0, atol=1e-3)
+
+
+@pytest.mark.slow
+def test_moordyn_input_of_the_same_lines(mooring, tmp_path, monkeypatch):
+    """The shipped MoorDyn v2 input (cases/oc4_semi_moordyn.dat) at rest against MoorPy:
+    vertical pull within 0.1 % (measured +0.01 %), K11, K44, K66 within 2 % (+1.5 %, +0.2 %,
+    0.0 %), K33 within 6 % (+5.6 %: MoorDyn's discretised line with seabed contact)."""
+    pytest.importorskip("moordyn")
+    from hybridwsi.forces import MoorDynForce
+
+    monkeypatch.setenv("HYBRIDWSI_CACHE", str(tmp_path))
+    md = MoorDynForce.from_case(CASE)
+    f0, ref = md.rest_force(), mooring.preload()
+    assert f0[2] == pytest.approx(ref[2], rel=1e-3)
+    k, kp = md.stiffness(), mooring.stiffness()
+    for i, tol in ((0, 0.02), (2, 0.06), (3, 0.02), (5, 0.02)):
+        assert k[i, i] == pytest.approx(kp[i, i], rel=tol), i
