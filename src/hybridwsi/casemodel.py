@@ -606,6 +606,8 @@ class CaseModel:
         excite = wave if forces["excitation"] else None
         ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
               and forces["radiation"] == "statespace" else None)
+        if ss is None and forces["radiation"] == "statespace" and self.case.get("radiation"):
+            ss = radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
         hist = cummins.simulate(
             self.coeffs, dofs=self.dofs, duration=duration, dt=dt, wave=excite, z0=z0,
             zdot0=zdot0, forces=list(comps.values()), radiation=forces["radiation"],
