@@ -18,7 +18,7 @@ def convergence_table(args: dict, panel_sizes: Sequence[float], omegas: Sequence
                       cache_dir: str | None = None, jobs: int = 1) -> None:
     """Print a markdown table of ``terms`` at ``omegas`` (and A(∞)) per panel size.
 
-    ``args``: the case's :func:`hybridwsi.cases.bem_arguments` (body, depth, ``low_kh``);
+    ``args``: the case's :func:`hybridwsi.casemodel.bem_arguments` (body, depth, ``low_kh``);
     ``terms``: (header, ``"A"`` or ``"B"``, i, j) with 0-based indices into ``dofs``.
     """
     heads = " | ".join(h for h, *_ in terms)
