@@ -15,11 +15,12 @@ Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem.py).
 from __future__ import annotations
 
 import shutil
-import sys
 import time
 from pathlib import Path
 
 import xarray as xr
+
+from bem_tables import convergence_table
 
 from hybridwsi.casemodel import bem_arguments
 from hybridwsi.cases import load_case
@@ -40,25 +41,10 @@ CURVES = ((("Surge", "Surge"), "A"), (("Heave", "Heave"), "A"), (("Pitch", "Pitc
 def convergence(panel_sizes: list[float], omegas: list[float], cache_dir: str | None,
                 jobs: int) -> None:
     """Print A33, A55, B11 at ``omegas`` and A(inf) for each panel size (markdown table)."""
-    args = bem_arguments(load_case("oc3_hywind"))
-    body, depth = args["body"], args["water_depth"]
-    print("| panel size [m] | hull + lid panels | ω [rad/s] | A33 [kg] | A55 [kg m²] | "
-          "B11 [N s/m] | time [s] |")
-    print("|---|---|---|---|---|---|---|")
-    for h in panel_sizes:
-        start = time.perf_counter()
-        ds = bem.compute(body, omegas, water_depth=depth, panel_size=h, low_kh=args["low_kh"],
-                         dofs=("Surge", "Heave", "Pitch"), include_zero=False,
-                         cache_dir=cache_dir, progress=False, n_jobs=jobs)
-        wall = time.perf_counter() - start
-        panels = f"{ds.attrs['n_panels']} + {ds.attrs['n_lid_panels']}"
-        a, b = co.matrix_omega(ds, "added_mass"), co.matrix_omega(ds, "radiation_damping")
-        for k, w in enumerate(co.omega(ds)):
-            print(f"| {h:g} | {panels} | {w:g} | {a[k, 1, 1]:.5e} | {a[k, 2, 2]:.5e} | "
-                  f"{b[k, 0, 0]:.5e} | {wall:.0f} |")
-        ainf = co.matrix(ds, "added_mass_inf")
-        print(f"| {h:g} | {panels} | ∞ | {ainf[1, 1]:.5e} | {ainf[2, 2]:.5e} | 0 | |")
-        sys.stdout.flush()
+    convergence_table(bem_arguments(load_case("oc3_hywind")), panel_sizes, omegas,
+                      [("A33 [kg]", "A", 1, 1), ("A55 [kg m²]", "A", 2, 2),
+                       ("B11 [N s/m]", "B", 0, 0)], dofs=("Surge", "Heave", "Pitch"),
+                      cache_dir=cache_dir, jobs=jobs)
 
 
 def ship(cache_dir: str | None, jobs: int) -> xr.Dataset:

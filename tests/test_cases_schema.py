@@ -206,7 +206,9 @@ def test_every_number_of_the_schema_says_its_unit():
     """Documentation contract: a number key without a unit is a pure number on purpose."""
     pure = {"drag_cd", "morison_ca", "deep_water_kh", "gamma", "hdx", "gain", "alpha_body",
             "lr", "input_noise", "val_fraction", "weight_decay", "perturbation",
-            "turbulence_intensity", "pitch_ki"}
+            "turbulence_intensity", "pitch_ki",
+            "cd", "ca",  # members' Morison coefficients (axial_cd: a list of them)
+            "tol"}  # [radiation] relative fit error
     for at, node in iter_nodes(CASE):
         if isinstance(node, Number) and not node.integer and node.unit == "":
             name = at[-1]

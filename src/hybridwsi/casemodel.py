@@ -17,7 +17,8 @@ component           TimeHistory variable  from
 ``mooring``         ``F_mooring``         ``[mooring]``; model ``[forces] mooring`` or
                                           ``--mooring``: ``table`` (MoorPy's interpolant),
                                           ``quasi-static`` (MoorPy every call), ``moordyn``
-``morison``         ``F_morison``         ``[hydrodynamics] drag_cd``, ``[drag]``, the hull
+``morison``         ``F_morison``         ``[hydrodynamics] drag_cd``, ``[drag]``, the hull;
+                                          a ``columns`` hull: its members' drag
 ``rotor``           ``F_rotor``           ``[rotor]``
 ``linear_damping``  ``F_damping``         ``[hydrodynamics] additional_damping``
 ``external_force``  ``F_external``        ``[external_force] file`` (a force table)
@@ -57,6 +58,7 @@ from hybridwsi.forces import (
     Hydrostatic,
     KnownComponent,
     MooringForce,
+    MemberMorison,
     MooringSystem,
     MorisonDrag,
     PrescribedForce,
@@ -69,6 +71,7 @@ from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.hydro.formats import read_coefficients
 from hybridwsi.hydro.statespace import RadiationSS
+from hybridwsi.hydro.strip import case_elements, with_slender_members
 from hybridwsi.importers import read_elevation
 from hybridwsi.waves import ElevationRecord, Wave
 
@@ -213,7 +216,7 @@ def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]
     dict
         ``body`` (:func:`body_from_case`), ``omega`` (:func:`frequencies`) and the table's
         entries among :data:`BEM_KEYS` (``water_depth`` defaults to the environment's, else
-        infinite).
+        infinite; ``wave_directions`` [rad] also from ``wave_directions_deg`` [deg]).
     """
     cfg = case.get(table)
     if not isinstance(cfg, Mapping):
@@ -222,13 +225,30 @@ def bem_arguments(case: Mapping[str, Any], table: str = "bem") -> dict[str, Any]
     args.setdefault("water_depth", case.get("environment", {}).get("water_depth", math.inf))
     if "dofs" in args:
         args["dofs"] = tuple(args["dofs"])
+    if "wave_directions_deg" in cfg:  # numpy's degrees-to-radians: the shipped files' key
+        args["wave_directions"] = tuple(float(v) for v in np.radians(cfg["wave_directions_deg"]))
     return {"body": body_from_case(case), "omega": frequencies(cfg), **args}
 
 
 # ------------------------------------------------------------------------------ pieces
-def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float) -> RadiationSS:
+def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
+                 fit: Mapping[str, Any] | None = None) -> RadiationSS:
     """The radiation state space ``cummins.simulate`` would fit itself (same tolerance),
-    fitted once and reused (a sweep ships it to its workers)."""
+    fitted once and reused (a sweep ships it to its workers).
+
+    ``fit``: a case's ``[radiation]`` table instead (``t_max`` [s] and ``dt`` [s] of the
+    kernel, ``max_order``, ``tol``, ``balance``: :func:`hybridwsi.hydro.statespace.
+    fit_radiation_ss` with every DOF weighed alike), for multi-DOF kernels the default fit
+    does not capture (the OC4 semi: docs/OC4_SEMI.md)."""
+    if fit:
+        from hybridwsi.hydro.irf import radiation_irf
+        from hybridwsi.hydro.statespace import fit_radiation_ss
+
+        kw = {k: fit[k] for k in ("t_max", "dt") if k in fit}
+        kernel = radiation_irf(coeffs, **kw).sel(radiating_dof=list(dofs),
+                                                 influenced_dof=list(dofs))
+        opts = {k: fit[k] for k in ("tol", "max_order", "balance") if k in fit}
+        return fit_radiation_ss(kernel, coeffs=coeffs, **opts)
     tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
     return cummins.build_system(coeffs, dofs=dofs, mass=mass, radiation="statespace", dt=dt,
                                 ss_tol=tol).ss
@@ -252,7 +272,17 @@ def case_coefficients(case: Case, *, coeffs: str | os.PathLike | xr.Dataset | No
         raise InputError(f"{case.label}: {exc}") from None
     with warnings.catch_warnings():  # Capytaine's chatter on loading
         warnings.simplefilter("ignore")
-        return bem.compute(**args, cache_dir=cache_dir, progress=progress)
+        coeffs = bem.compute(**args, cache_dir=cache_dir, progress=progress)
+    if has_members(case):  # the slender members' Morison inertia (hydro/strip.py)
+        coeffs = with_slender_members(coeffs, case_elements(case))
+    return coeffs
+
+
+def has_members(case: Mapping[str, Any]) -> bool:
+    """Whether the case's hull is a frame of members (``type = "columns"``): its slender
+    members' inertia belongs to the coefficients, its drag to ``MemberMorison``."""
+    body = case.get("body", {})
+    return body.get("hull", body).get("type") == "columns"
 
 
 def force_table(path: str | os.PathLike, dofs: Sequence[str] = ("Heave",)) -> PrescribedForce:
@@ -332,7 +362,9 @@ def case_components(case: Case, dofs: Sequence[str], *, wave: Wave | None = None
     if model != "none":
         out["mooring"] = mooring_component(case, dofs, model, table=mooring_table, dt=dt)
     if on["morison"]:
-        out["morison"] = MorisonDrag.from_case(case, dofs, wave=wave, ramp=ramp)
+        out["morison"] = (
+            MemberMorison.from_case(case, dofs, wave=wave, ramp=ramp, inertia=False)
+            if has_members(case) else MorisonDrag.from_case(case, dofs, wave=wave, ramp=ramp))
     if on["rotor"]:
         out["rotor"] = rotor_from_case(case, dofs)
     if on["linear_damping"]:
@@ -497,7 +529,7 @@ class CaseModel:
         table = MooringForce.from_case(case, dofs).table if model == "table" else None
         ss = None
         if dt is not None and case["forces"]["radiation"] == "statespace":
-            ss = radiation_ss(coeffs, dofs, None, dt)
+            ss = radiation_ss(coeffs, dofs, None, dt, case.get("radiation"))
         return cls(case, dofs, coeffs, model, table, dt, ss)
 
     @cached_property
@@ -574,6 +606,8 @@ class CaseModel:
         excite = wave if forces["excitation"] else None
         ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
               and forces["radiation"] == "statespace" else None)
+        if ss is None and forces["radiation"] == "statespace" and self.case.get("radiation"):
+            ss = radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
         hist = cummins.simulate(
             self.coeffs, dofs=self.dofs, duration=duration, dt=dt, wave=excite, z0=z0,
             zdot0=zdot0, forces=list(comps.values()), radiation=forces["radiation"],

@@ -558,6 +558,66 @@ class AiryKinematics:
         return u * self.cos_beta, u * self.sin_beta
 
 
+
+class AiryPoints:
+    """Linear (Airy) wave particle velocity and acceleration at scattered points ``(x, y, z)``
+    (the elements of a frame of members), formulas of :class:`AiryKinematics` with the phase
+    ``θ_ij = ω_j t + φ_j − k_j (x_i cos β + y_i sin β)`` per point:
+
+        u_h = Σ_j P_ij cos θ_ij (along β),   w = −Σ_j Q_ij sin θ_ij,
+        ∂u_h/∂t = −Σ_j ω_j P_ij sin θ_ij,      ∂w/∂t = −Σ_j ω_j Q_ij cos θ_ij,
+
+    ``P_ij = a_j ω_j cosh(k_j (z_i + h)) / sinh(k_j h)``, ``Q_ij`` the same with sinh. The
+    optional half-cosine ramp multiplies velocity and acceleration (its own time derivative is
+    left out: it is slow against the waves).
+
+    Parameters
+    ----------
+    wave : Wave
+        The incident wave.
+    points : array_like, shape (n, 3)
+        Positions [m], global frame at rest, ``z >= -h``.
+    depth, g, ramp : float
+        Water depth h [m] (``inf``: deep water), gravity [m/s²], ramp duration [s].
+    """
+
+    def __init__(self, wave: Wave, points: Any, depth: float = np.inf, g: float = G,
+                 ramp: float = 0.0) -> None:
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        if not np.all(np.isfinite(pts)):
+            raise InputError("wave kinematics: points must be finite [m]")
+        if not depth > 0:
+            raise InputError(f"water depth must be > 0, got {depth}")
+        if np.any(pts[:, 2] < -depth):
+            raise InputError("wave kinematics: a point is below the seabed")
+        ramp_factor(np.zeros(1), ramp)
+        comp = wave.components()
+        keep = comp.amplitude > 0
+        omega, amp = comp.omega[keep], comp.amplitude[keep]
+        k = dispersion_k(omega, depth, g)
+        beta = float(getattr(wave, "direction", 0.0))
+        self.direction = np.array([math.cos(beta), math.sin(beta)])
+        self.omega = omega
+        #: (n, n_comp) phase at each point [rad]
+        self.phase = comp.phase[keep] - np.outer(pts[:, :2] @ self.direction, k)
+        self.horizontal = airy_depth_factor(k, pts[:, 2], depth) * (amp * omega)
+        self.vertical = airy_vertical_factor(k, pts[:, 2], depth) * (amp * omega)
+        self.ramp = float(ramp)
+
+    def velocity_acceleration(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Velocity [m/s] and acceleration [m/s²] at one time ``t`` [s], each (n, 3)."""
+        theta = self.omega * float(t) + self.phase
+        c, s = np.cos(theta), np.sin(theta)
+        uh = np.sum(self.horizontal * c, axis=1)
+        w = -np.sum(self.vertical * s, axis=1)
+        ah = -np.sum(self.horizontal * s * self.omega, axis=1)
+        aw = -np.sum(self.vertical * c * self.omega, axis=1)
+        f = float(ramp_factor(np.array([float(t)]), self.ramp)[0]) if self.ramp else 1.0
+        vel = np.column_stack([uh * self.direction[0], uh * self.direction[1], w]) * f
+        acc = np.column_stack([ah * self.direction[0], ah * self.direction[1], aw]) * f
+        return vel, acc
+
+
 def particle_velocity(wave: Wave, t: float | np.ndarray, x: float, z: Any, *, y: float = 0.0,
                       depth: float = np.inf, g: float = G, ramp: float = 0.0
                       ) -> tuple[np.ndarray, np.ndarray]:

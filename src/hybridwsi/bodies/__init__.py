@@ -9,7 +9,9 @@ the diagnostic. Implementations:
   (:mod:`~hybridwsi.bodies.axisymmetric`);
 - :class:`MeshBody` — any mesh file Capytaine reads, with given mass properties
   (:mod:`~hybridwsi.bodies.mesh`);
-- :class:`RigidAssembly` — a hull plus :class:`MassItem` s (:mod:`~hybridwsi.bodies.assembly`).
+- :class:`RigidAssembly` — a hull plus :class:`MassItem` s (:mod:`~hybridwsi.bodies.assembly`);
+- :class:`ColumnsBody` — vertical columns (panel model) and slender :class:`Member` s (strip
+  theory), e.g. a semi-submersible (:mod:`~hybridwsi.bodies.columns`).
 
 :func:`body_from_dict` rebuilds any of them from ``body.to_dict()``.
 """
@@ -17,9 +19,12 @@ the diagnostic. Implementations:
 from hybridwsi.bodies.assembly import MassItem, RigidAssembly
 from hybridwsi.bodies.axisymmetric import AxisymmetricBody
 from hybridwsi.bodies.base import Body, WaterplaneMoments, body_from_dict
+from hybridwsi.bodies.columns import ColumnsBody
+from hybridwsi.bodies.members import Member, MemberElements, member_elements, point_jacobians
 from hybridwsi.bodies.mesh import MeshBody
 from hybridwsi.bodies.sphere import FloatingSphere, cap_volume
 from hybridwsi.dofs import RIGID_DOFS, check_dofs
 
-__all__ = ["RIGID_DOFS", "AxisymmetricBody", "Body", "FloatingSphere", "MassItem", "MeshBody",
-           "RigidAssembly", "WaterplaneMoments", "body_from_dict", "cap_volume", "check_dofs"]
+__all__ = ["RIGID_DOFS", "AxisymmetricBody", "Body", "ColumnsBody", "FloatingSphere", "MassItem",
+           "Member", "MemberElements", "MeshBody", "RigidAssembly", "WaterplaneMoments",
+           "body_from_dict", "cap_volume", "check_dofs", "member_elements", "point_jacobians"]

@@ -4,7 +4,8 @@
 floating sphere of the paper, its BEM configuration, the regular-wave case (T = 0.75 s,
 H = 0.05 m) and the paper's Table 1 values; ``load_case("kramer2021_decay")`` the decay
 experiment of Kramer et al. (2021); ``load_case("oc3_hywind")`` the OC3-Hywind spar with the
-NREL 5-MW turbine (docs/OC3_HYWIND.md); ``load_case("path/to/my_spar.toml")`` a user's case
+NREL 5-MW turbine (docs/OC3_HYWIND.md); ``load_case("oc4_semi")`` the OC4-DeepCwind
+semi-submersible with the same turbine (docs/OC4_SEMI.md); ``load_case("path/to/my_spar.toml")`` a user's case
 file. Every case is checked against one schema (:mod:`hybridwsi.cases.schema`,
 docs/CASES.md); paths inside a case file are relative to it.
 

@@ -445,6 +445,29 @@ _MESH = Table(fields={
                           doc="any mesh Capytaine reads (GDF, STL, NEMOH .dat, ...)"),
     "file_format": Text(doc="Capytaine's format name when the extension does not tell it"),
     **_MASS_PROPS, **_WATER, "name": Text(doc="name of the Capytaine body")})
+_MEMBER = Table(fields={
+    "name": Text(required=True, doc="unique member name"),
+    "ends": ListOf(item=_vec3("m"), length=2, required=True,
+                   doc="end points of the member's axis (global frame at rest)"),
+    "diameter": positive("m", "outer diameter", required=True),
+    "potential": Boolean(default=False,
+                         doc="in the potential-flow panel model (vertical columns only); "
+                             "false: a slender member, strip theory only"),
+    "cd": nonnegative("", "transverse drag coefficient (Morison, forces/morison.py)"),
+    "ca": nonnegative("", "transverse added-mass coefficient (Morison inertia of the slender "
+                          "members; 0 on potential-flow members)"),
+    "axial_cd": ListOf(item=nonnegative(""), length=2,
+                       doc="axial drag coefficients of the end discs [end 1, end 2] "
+                           "(standard form 1/2 rho Cd A |w| w; heave plates)")},
+    doc="a straight circular cylinder (bodies/members.py)")
+_COLUMNS = Table(fields={
+    "members": TableList(table=_MEMBER, required=True,
+                         doc="the cylinders: vertical potential-flow members on one axis form "
+                             "a column (panel model); the others are slender members"),
+    "symmetry": integer(1, "order n of the layout's dihedral symmetry (mirror y = 0) the mesh "
+                           "uses: one 2n-th is meshed (1: none)", default=1),
+    **_MASS_PROPS, **_WATER, "name": Text(doc="name of the Capytaine body")},
+    doc="vertical columns and slender members (bodies/columns.py ColumnsBody)")
 _STRUCTURE = {"structure": Text(doc="the [[body.items]] entry whose mass properties are the "
                                     "hull's own")}
 _ITEM = Table(fields={"name": Text(required=True), "mass": positive("kg", required=True),
@@ -453,13 +476,14 @@ _ITEM = Table(fields={"name": Text(required=True), "mass": positive("kg", requir
 _ASSEMBLY = Table(fields={
     "hull": OneOf(required=True, variants={
         name: Table(fields={**t.fields, **_STRUCTURE}, checks=t.checks)
-        for name, t in (("sphere", _SPHERE), ("axisymmetric", _AXISYMMETRIC), ("mesh", _MESH))}),
+        for name, t in (("sphere", _SPHERE), ("axisymmetric", _AXISYMMETRIC), ("mesh", _MESH),
+                        ("columns", _COLUMNS))}),
     "items": TableList(table=_ITEM, doc="rigid mass items"),
     "reference_point": _vec3("m", "DOF origin (default: the assembly's centre of mass)"),
     "name": Text()})
 #: the body variants (key ``type``; without it a sphere, the paper's files)
 BODIES = {"sphere": _SPHERE, "axisymmetric": _AXISYMMETRIC, "mesh": _MESH,
-          "rigid_assembly": _ASSEMBLY}
+          "columns": _COLUMNS, "rigid_assembly": _ASSEMBLY}
 
 
 def _omega_order(table: dict[str, Any], at: KeyPath, ctx: Context) -> None:
@@ -480,11 +504,15 @@ _BEM = Table(fields={
     "dofs": ListOf(item=Dof(), min_length=1, unique=True, doc="DOFs solved (default the body's)"),
     "wave_directions": ListOf(item=Number(unit="rad"), min_length=1,
                               doc="incident wave directions (default [0])"),
+    "wave_directions_deg": ListOf(item=Number(unit="deg"), min_length=1, unique=True,
+                                  doc="incident wave directions in degrees (converted with "
+                                      "numpy.radians: the key of the shipped OC4 file)"),
     "method": Text(choices=("direct", "indirect")),
     "deep_water_kh": nonnegative("", "kh above which the deep-water Green function is used"),
     "low_kh": Text(choices=("fingreen", "drop")),
     "low_kh_panels": integer(20)},
-    exclusive=(("panel_size", "n_panels"),), checks=(_omega_order,))
+    exclusive=(("panel_size", "n_panels"), ("wave_directions", "wave_directions_deg")),
+    checks=(_omega_order,))
 
 _SEA = Table(fields={"hs": positive("m", "significant wave height", required=True),
                      "tp": positive("s", "peak period", required=True),
@@ -547,7 +575,11 @@ _MOORING = Table(fields={
     "reference": Table(fields={
         "preload": ListOf(item=Number(unit=None), length=6, doc="F0 [N, N m]"),
         "K": ListOf(item=ListOf(item=Number(unit=None), length=6), length=6,
-                    doc="-dF/dq [SI per DOF pair]")}, doc="published values, for tests")})
+                    doc="-dF/dq [SI per DOF pair]"),
+        "K11": Number(unit="N/m", doc="published surge (= sway) stiffness"),
+        "K33": Number(unit="N/m", doc="published heave stiffness"),
+        "K44": Number(unit="N m/rad", doc="published roll (= pitch) stiffness")},
+        doc="published values, for tests")})
 
 _ROTOR = Table(fields={
     "state": Text(choices=("parked", "thrust", "operating"), default="parked",
@@ -622,6 +654,21 @@ CASE = Table(fields={
         "additional_damping": MapOf(keys="dof", value=DofNumber(
             linear="N s/m", rotational="N m s/rad", lo=0.0),
             doc="additional linear damping per DOF (the other DOFs 0)")}),
+    "radiation": Table(fields={
+        "t_max": positive("s", "length of the radiation kernel K(t)"),
+        "dt": positive("s", "sampling step of K(t) for the fit"),
+        "max_order": integer(1, "largest state-space order tried"),
+        "tol": Number(lo=0.0, hi=1.0, open_lo=True, doc="relative time error of the fit"),
+        "balance": Boolean(doc="fit every DOF's kernel scaled to peak 1")},
+        doc="the radiation state-space fit (casemodel.radiation_ss); default: "
+            "cummins.simulate's own"),
+    "morison": Table(fields={"element_length": positive("m", "element length along the "
+                                                        "members (default 1 m)")},
+                     doc="Morison elements of the [[body.hull.members]] (forces/morison.py "
+                         "MemberMorison)"),
+    "linear_drag": MapOf(keys="dof", value=DofNumber(linear="m/s", rotational="rad/s", lo=0.0),
+                         doc="velocity amplitudes of the Borgman-linearised member drag per "
+                             "DOF (report/fowt_semi.py)"),
     "drag": Table(fields={"strip_length": positive("m", "strip length (default 1 m)"),
                           "n_strips": integer(1, "number of equal strips instead")},
                   exclusive=(("strip_length", "n_strips"),),
@@ -664,6 +711,8 @@ CASE = Table(fields={
         "height": Either(options=(positive("m"), ListOf(item=positive("m"), min_length=1)),
                          doc="wave height(s)"),
         "duration": positive("s"), "dt": positive("s"), "ramp": nonnegative("s"),
+        "headings_deg": ListOf(item=Number(unit="deg"), min_length=1,
+                               doc="wave headings [deg] of the RAO check"),
         "window_start": nonnegative("s", "start of the regression window"),
         "steady_state_start": nonnegative("s", "start of the steady-state window")},
         doc="the case's regular seas (the paper's, the definition's)"),
@@ -705,8 +754,10 @@ def _check_dof_sets(case: dict[str, Any], ctx: Context) -> None:
 #: [forces] switch -> (what its data is, whether the case has it)
 _NEEDS: dict[str, tuple[str, Callable[[dict[str, Any]], bool]]] = {
     "mooring": ("[mooring] table", lambda c: "mooring" in c),
-    "morison": ("[hydrodynamics] drag_cd > 0",
-                lambda c: c.get("hydrodynamics", {}).get("drag_cd", 0.0) > 0.0),
+    "morison": ("[hydrodynamics] drag_cd > 0 or members with cd",
+                lambda c: c.get("hydrodynamics", {}).get("drag_cd", 0.0) > 0.0
+                or any(m.get("cd", 0.0) > 0.0 or any(m.get("axial_cd", ()))
+                       for m in _hull(c).get("members", ()))),
     "rotor": ("[rotor] table", lambda c: "rotor" in c),
     "linear_damping": ("[hydrodynamics] additional_damping",
                        lambda c: bool(c.get("hydrodynamics", {}).get("additional_damping"))),
@@ -734,14 +785,18 @@ def _resolve_forces(case: dict[str, Any], ctx: Context) -> None:
     case["forces"] = forces
 
 
+def _hull(case: dict[str, Any]) -> dict[str, Any]:
+    body = case.get("body", {})
+    return body.get("hull", body)
+
+
 def _check_morison_hull(case: dict[str, Any], ctx: Context) -> None:
     if not case["forces"]["morison"]:
         return
-    body = case["body"]
-    hull = body.get("hull", body)
-    if hull.get("type") != "axisymmetric":
-        raise ctx.fail(("forces", "morison"), "Morison strip drag needs an axisymmetric "
-                                              "(r, z) profile: [body] or [body.hull]")
+    if _hull(case).get("type") not in ("axisymmetric", "columns"):
+        raise ctx.fail(("forces", "morison"), "Morison drag needs an axisymmetric (r, z) "
+                                              "profile or a columns hull's members: [body] or "
+                                              "[body.hull]")
 
 
 # ------------------------------------------------------------------------- entry points

@@ -26,7 +26,8 @@ from hybridwsi.forces.linear import (
 )
 from hybridwsi.forces.moordyn import MoorDynForce
 from hybridwsi.forces.mooring import MooringForce, MooringLines, MooringSystem, MooringTable
-from hybridwsi.forces.morison import MorisonDrag, Strips, additional_damping, profile_strips
+from hybridwsi.forces.morison import (MemberMorison, MorisonDrag, Strips, additional_damping,
+                                     profile_strips)
 from hybridwsi.forces.radiation import RadiationMemory
 from hybridwsi.forces.rotor import (
     OperatingRotor,
@@ -45,6 +46,6 @@ __all__ = [
     "ExactHydrostatic", "MoorDynForce", "MooringForce", "MooringLines", "MooringSystem",
     "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust",
-    "OperatingRotor", "PIControlledRotor", "RotorTable", "rotor_from_case",
+    "OperatingRotor", "PIControlledRotor", "RotorTable", "rotor_from_case", "MemberMorison",
     "SlowDriftForce",
 ]

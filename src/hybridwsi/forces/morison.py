@@ -1,4 +1,5 @@
-"""Viscous drag on a vertical body of revolution by Morison strip theory, and the additional
+"""Morison's equation: strip drag on a vertical body of revolution (the spar), on a frame of
+cylindrical members in 6 DOFs (the semi-submersible, :class:`MemberMorison`), and the additional
 linear damping of a case.
 
 :class:`MorisonDrag` is the drag term of Morison's equation on a vertical axisymmetric body
@@ -54,11 +55,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi.bodies.members import MemberElements, point_jacobians
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.linear import LinearDamping
-from hybridwsi.waves import AiryKinematics, Wave
+from hybridwsi.hydro.strip import case_elements
+from hybridwsi.waves import AiryKinematics, AiryPoints, Wave
 
 #: default strip length [m] (OC3: 120 strips along the 120 m draft; pure surge is exact for
 #: any length, the pitch-rate moment within 3.5e-5 of 2400 strips; docs/OC3_HYWIND.md)
@@ -400,3 +403,185 @@ def additional_damping(case: Mapping[str, Any], dofs: Sequence[str] | str | None
         raise InputError("additional damping must be finite and >= 0")
     idx = index(dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS))
     return LinearDamping(np.diag(diag)[np.ix_(idx, idx)])
+
+
+# ============================================================================================
+# Morison's equation on a frame of cylindrical members (semi-submersibles)
+# ============================================================================================
+class MemberMorison(KnownComponent):
+    """Morison's equation on every member of a frame, in 6 DOFs, on the relative velocity.
+
+    Per element ``k`` (centre r_k, axis t_k, length l_k, diameter D_k) and per end disc ``e``
+    (area A_e, normal n_e), with ``u = u_wave − v`` the relative velocity and
+    ``u_n = (1 − t tᵀ) u`` its part normal to the axis:
+
+        transverse drag   dF = ½ ρ Cd D l |u_n| u_n
+        axial end drag    dF = ½ ρ Cd_ax A |u·n| (u·n) n       (heave plates)
+        inertia           dF = ρ (1 + Ca) V (1 − t tᵀ) a_wave − ρ Ca V (1 − t tᵀ) a_body
+
+    The inertia terms act only on members outside the potential-flow model (``potential =
+    false``: pontoons and braces), whose added mass and wave inertia the BEM does not hold;
+    the columns get drag only. The body acceleration part is the constant added-mass matrix
+    ``A_m = Σ ρ Ca V Jᵀ (1 − t tᵀ) J`` returned by :meth:`linear_coefficients` (moved to the
+    left-hand side of the ODE). Forces and moments about the reference point: ``Q = Σ Jᵀ dF``
+    (:func:`point_jacobians`). Small motions: elements stay at their rest positions, no drag
+    above the still-water level, no wave stretching.
+
+    Parameters
+    ----------
+    elements : MemberElements
+        :func:`member_elements`.
+    rho : float
+        Water density [kg/m³].
+    dofs : sequence of str
+        DOFs of the histories and ODE states (others held at rest).
+    reference_point : (3,) floats
+        O [m].
+    wave : hybridwsi.waves.Wave, optional
+        Linear Airy kinematics of this wave (off: still water).
+    water_depth, g, ramp : float
+        Depth [m], gravity [m/s²] and half-cosine ramp [s] of the wave kinematics.
+    inertia : bool
+        Include the slender members' inertia (added mass, wave inertia). False when the
+        coefficients already hold it (:func:`hybridwsi.hydro.strip.with_slender_members`):
+        then this component is the members' drag only.
+    """
+
+    name = "member_morison"
+
+    def __init__(self, elements: MemberElements, rho: float,
+                 dofs: Sequence[str] | str = RIGID_DOFS, *,
+                 reference_point: Sequence[float] = (0.0, 0.0, 0.0), wave: Wave | None = None,
+                 water_depth: float = math.inf, g: float = 9.81, ramp: float = 0.0,
+                 inertia: bool = True) -> None:
+        if not (math.isfinite(rho) and rho > 0):
+            raise InputError(f"Morison: rho must be > 0, got {rho}")
+        self.inertia = bool(inertia)
+        self.elements, self.rho = elements, float(rho)
+        self.dofs = check_dofs(dofs)
+        idx = index(self.dofs)
+        e = elements
+        self._jac = point_jacobians(e.centre, reference_point)[:, :, idx]
+        self._jac_end = point_jacobians(e.end_centre, reference_point)[:, :, idx]
+        self._t = e.tangent
+        #: ½ ρ Cd D l per element and ½ ρ Cd_ax A per end disc [kg/m]
+        self.coef = 0.5 * self.rho * e.cd * e.diameter * e.length
+        self.coef_end = 0.5 * self.rho * e.end_cd * e.end_area
+        inertia_volume = np.where(e.inertia & self.inertia, e.volume, 0.0)
+        self._fk = self.rho * (1.0 + e.ca) * inertia_volume
+        normal_jac = self._jac - np.einsum("nk,nl,nld->nkd", self._t, self._t, self._jac)
+        self._added_mass = np.einsum("n,nkd,nke->de", self.rho * e.ca * inertia_volume,
+                                     normal_jac, normal_jac)
+        self.wave = wave
+        self._wave = None if wave is None else AiryPoints(
+            wave, np.concatenate([e.centre, e.end_centre]), water_depth, g, ramp)
+        self._b_eq: np.ndarray | None = None
+
+    @classmethod
+    def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None, *,
+                  wave: Wave | None = None, ramp: float = 0.0, inertia: bool = True
+                  ) -> MemberMorison:
+        """The members of ``[body.hull]`` (``[[body.hull.members]]`` with their Morison
+        coefficients; :func:`hybridwsi.hydro.strip.case_elements`), ``[environment]`` ρ, g,
+        depth; ``dofs`` default the case's ``default_dofs``; ``inertia`` as in the class."""
+        try:
+            env = case["environment"]
+            ref = case["body"].get("reference_point", (0.0, 0.0, 0.0))
+            rho, g = env["rho"], env["g"]
+        except (KeyError, AttributeError) as exc:
+            raise InputError(f"case has no Morison entry {exc}") from None
+        return cls(case_elements(case), rho,
+                   dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS),
+                   reference_point=ref, wave=wave, water_depth=env.get("water_depth", math.inf),
+                   g=g, ramp=ramp, inertia=inertia)
+
+    # ------------------------------------------------------------------ evaluation
+    def _check(self, n_dof: int) -> None:
+        if n_dof != len(self.dofs):
+            raise InputError(f"Morison members are set up for {len(self.dofs)} DOFs "
+                             f"({', '.join(self.dofs)}), got {n_dof}")
+
+    def _relative(self, t: float, zdot: np.ndarray):
+        """Relative velocity at elements and end discs (..., n, 3), (..., m, 3), and the wave
+        acceleration at the elements (n, 3) or None."""
+        u = -np.einsum("nkd,...d->...nk", self._jac, zdot)
+        u_end = -np.einsum("nkd,...d->...nk", self._jac_end, zdot)
+        acc = None
+        if self._wave is not None:
+            vel, a = self._wave.velocity_acceleration(t)
+            n = self._jac.shape[0]
+            u, u_end, acc = u + vel[:n], u_end + vel[n:], a[:n]
+        return u, u_end, acc
+
+    def generalised_force(self, t: float, zdot: np.ndarray) -> np.ndarray:
+        """Drag and wave inertia ``Σ Jᵀ dF`` [N, N m] for DOF rates ``zdot`` (..., n_dof)
+        [m/s, rad/s] at one time ``t`` [s] (no body-acceleration part)."""
+        zdot = np.asarray(zdot, dtype=float)
+        self._check(zdot.shape[-1])
+        u, u_end, acc = self._relative(t, zdot)
+        un = u - np.sum(u * self._t, axis=-1, keepdims=True) * self._t
+        f = (self.coef * np.linalg.norm(un, axis=-1))[..., None] * un
+        if acc is not None and np.any(self._fk):
+            an = acc - np.sum(acc * self._t, axis=-1, keepdims=True) * self._t
+            f = f + self._fk[:, None] * an
+        q = np.einsum("nkd,...nk->...d", self._jac, f)
+        if self.coef_end.size:
+            w = np.sum(u_end * self.elements.end_axis, axis=-1)
+            f_end = (self.coef_end * np.abs(w) * w)[..., None] * self.elements.end_axis
+            q = q + np.einsum("nkd,...nk->...d", self._jac_end, f_end)
+        return q
+
+    def ode_force(self, t: float, z: np.ndarray, zdot: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return self.generalised_force(t, zdot)
+
+    def force(self, hist: xr.Dataset) -> np.ndarray:
+        """Total Morison force on a history (n_time, n_dof) [N, N m], with ``−A_m z̈``."""
+        dofs = tuple(str(d) for d in hist["dof"].values)
+        if dofs != self.dofs:
+            raise InputError(f"Morison member DOFs {list(self.dofs)} differ from the "
+                             f"history's {list(dofs)}")
+        times = np.asarray(hist["time"].values, dtype=float)
+        zdot = kinematic(hist, "zdot")
+        out = np.array([self.generalised_force(t, v) for t, v in zip(times, zdot)])
+        if np.any(self._added_mass):
+            out -= kinematic(hist, "zddot") @ self._added_mass.T
+        return out
+
+    # ------------------------------------------------------------------ linearisation
+    def added_mass(self) -> np.ndarray:
+        """``A_m`` (n_dof, n_dof) [kg, kg m, kg m²]: Morison added mass of the members outside
+        the potential-flow model."""
+        return self._added_mass.copy()
+
+    def linearise_at(self, amplitude: Sequence[float] | np.ndarray) -> MemberMorison:
+        """Damping energy-equivalent to the drag of a harmonic motion in still water with DOF
+        velocity amplitudes ``amplitude`` (n_dof,) [m/s, rad/s], in phase (Borgman): per
+        element ``(8/3π) coef |(1 − t tᵀ) J a| Jᵀ (1 − t tᵀ) J``, per disc
+        ``(8/3π) coef |n·J a| Jᵀ n nᵀ J``."""
+        amp = np.asarray(amplitude, dtype=float).reshape(-1)
+        self._check(amp.size)
+        if not np.all(np.isfinite(amp)):
+            raise InputError("Morison: velocity amplitude must be finite")
+        normal_jac = self._jac - np.einsum("nk,nl,nld->nkd", self._t, self._t, self._jac)
+        speed = np.linalg.norm(normal_jac @ amp, axis=-1)
+        b = np.einsum("n,nkd,nke->de", _HARMONIC_FACTOR * self.coef * speed, normal_jac,
+                      normal_jac)
+        axial = np.einsum("nk,nkd->nd", self.elements.end_axis, self._jac_end)
+        b += np.einsum("n,nd,ne->de", _HARMONIC_FACTOR * self.coef_end * np.abs(axial @ amp),
+                       axial, axial)
+        self._b_eq = b
+        return self
+
+    def linear_coefficients(self, n_dof: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._check(n_dof)
+        zero = np.zeros((n_dof, n_dof))
+        b = self._b_eq if self._b_eq is not None else zero.copy()
+        return self._added_mass.copy(), b.copy(), zero
+
+    def describe(self) -> str:
+        e = self.elements
+        waves = "" if self.wave is None else f", wave kinematics {type(self.wave).__name__}"
+        inertia = len(set(np.array(e.member)[e.inertia])) if self.inertia else 0
+        return (f"member_morison({len(set(e.member))} members, {e.length.size} elements, "
+                f"{e.end_cd.size} axial end discs, Morison inertia on {inertia} members, "
+                f"DOFs {','.join(self.dofs)}{waves})")

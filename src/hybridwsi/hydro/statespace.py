@@ -255,6 +255,7 @@ def fit_radiation_ss(
     method: str = "hankel",
     dt: float | None = None,
     coeffs: xr.Dataset | None = None,
+    balance: bool = False,
 ) -> RadiationSS:
     """Realise the radiation kernel K(t) as a stable continuous state-space model.
 
@@ -276,6 +277,12 @@ def fit_radiation_ss(
     coeffs : xarray.Dataset, optional
         BEM coefficients; when given, ``fit_error["frequency_bem"]`` compares ``Re K̂(ω)``
         with their ``radiation_damping`` B(ω).
+    balance : bool
+        Fit ``K_ij / (s_i s_j)`` with ``s_i = sqrt(max_t |K_ii|)`` (every diagonal kernel of
+        peak 1) and scale the realisation back (``B`` by ``s_rad``, ``C`` by ``s_inf``): the
+        joint fit then weighs every DOF alike instead of the largest entries (N m s/rad of a
+        rotation against N s/m of a translation), and the order selection and ``tol`` refer to
+        the balanced kernel. Needs the same DOFs radiating and influenced.
 
     Returns
     -------
@@ -286,7 +293,8 @@ def fit_radiation_ss(
     if not 0 < tol < 1:
         raise InputError(f"tol must be in (0, 1), got {tol}")
     arr, dt0, rad, inf = _kernel_array(K, dt)
-    markov = arr.transpose(0, 2, 1)  # (nt, p=n_inf, m=n_rad): output force, input velocity
+    scale = _balance_scale(arr, rad, inf) if balance else np.ones(arr.shape[1])
+    markov = (arr / np.outer(scale, scale)).transpose(0, 2, 1)  # (nt, p=n_inf, m=n_rad)
     nt, p, m = markov.shape
     t_all = np.arange(nt) * dt0
     # decimate so that the Hankel matrix spans the whole kernel with at most MAX_HANKEL blocks
@@ -322,6 +330,7 @@ def fit_radiation_ss(
     if best is None:
         raise InputError("no stable state-space realisation found for K; check the kernel")
     err, (a, b, c, n_ref) = best
+    b, c = b * scale[None, :], scale[:, None] * c  # back to the kernel's units
     ss = RadiationSS(A=a, B=b, C=c, D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
                      n_reflected=n_ref, converged=err < tol or order is not None, dt_fit=dth)
     ss.fit_error = _fit_errors(ss, arr, dt0, err, coeffs)
@@ -329,6 +338,14 @@ def fit_radiation_ss(
         warnings.warn(f"radiation state space: order {ss.order} reaches a fit error of "
                       f"{err:.3g} > tol={tol}", stacklevel=2)
     return ss
+
+
+def _balance_scale(arr: np.ndarray, rad: list[str], inf: list[str]) -> np.ndarray:
+    """``sqrt(max_t |K_ii(t)|)`` per DOF (1 for a DOF whose kernel vanishes)."""
+    if list(rad) != list(inf):
+        raise InputError("balance needs the same radiating and influenced DOFs")
+    peak = np.abs(np.diagonal(arr, axis1=1, axis2=2)).max(axis=0)
+    return np.sqrt(np.where(peak > 0, peak, 1.0))
 
 
 def _era_order(u, sv, vt, h1, n, p, m, dth, t_all, markov):

@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -94,19 +94,29 @@ def modal_summary(coeffs: xr.Dataset, stiffness: np.ndarray, dofs: Sequence[str]
 
 
 def decay_histories(coeffs: xr.Dataset, forces: Sequence[KnownComponent], *,
-                    dofs: Sequence[str] = DOFS, quick: bool = False, dt: float = 0.25
-                    ) -> dict[str, xr.Dataset]:
-    """Free decays released from :data:`DECAY_OFFSET` in each DOF (the others at rest).
+                    dofs: Sequence[str] = DOFS, quick: bool = False, dt: float = 0.25,
+                    offsets: Mapping[str, float] | None = None,
+                    durations: Mapping[str, float] | None = None,
+                    radiation_ss: Any = None) -> dict[str, xr.Dataset]:
+    """Free decays released from ``offsets`` [m or rad] (default :data:`DECAY_OFFSET`) in each
+    DOF of ``offsets`` (the others at rest), all ``dofs`` free.
 
-    Durations: 10 surge periods (1240 s; 6 when ``quick``), 10 heave/pitch periods (300 s).
+    Durations [s] per released DOF from ``durations``; default 10 surge periods (1240 s; 6
+    when ``quick``), 10 heave/pitch periods (300 s). ``radiation_ss``: a fitted radiation
+    state space (:func:`hybridwsi.hydro.statespace.fit_radiation_ss`) instead of the default
+    fit in every run.
     """
+    offsets = DECAY_OFFSET if offsets is None else offsets
     out = {}
-    for i, dof in enumerate(dofs):
+    for dof in offsets:
         z0 = np.zeros(len(dofs))
-        z0[i] = DECAY_OFFSET[dof]
-        duration = (750.0 if quick else 1250.0) if dof == "Surge" else 300.0
+        z0[list(dofs).index(dof)] = offsets[dof]
+        if durations is not None:
+            duration = float(durations[dof])
+        else:
+            duration = (750.0 if quick else 1250.0) if dof == "Surge" else 300.0
         out[dof] = simulate(coeffs, dofs=dofs, duration=duration, dt=dt, z0=z0,
-                            forces=list(forces))
+                            forces=list(forces), radiation_ss=radiation_ss)
     return out
 
 
@@ -127,16 +137,22 @@ def harmonic_amplitude(t: np.ndarray, y: np.ndarray, omega: float) -> np.ndarray
 
 def frequency_response(coeffs: xr.Dataset, omega: float, force: np.ndarray,
                        stiffness: np.ndarray, damping: np.ndarray,
-                       dofs: Sequence[str] = DOFS) -> np.ndarray:
+                       dofs: Sequence[str] = DOFS, radiation_ss: Any = None) -> np.ndarray:
     """Steady-state complex amplitude X = [−ω²(M + A(ω)) + iω(B(ω) + B_add) + C + K]⁻¹ F̂.
 
     Convention z = Re(X e^{iωt}); A and B interpolated linearly in ω (the coefficients'
     :func:`~hybridwsi.hydro.coefficients.at_frequency`), C the hydrostatics with the weight
-    term, ``stiffness`` K and ``damping`` B_add on ``dofs`` [SI per DOF].
+    term, ``stiffness`` K and ``damping`` B_add on ``dofs`` [SI per DOF]. With
+    ``radiation_ss`` (a :class:`~hybridwsi.hydro.statespace.RadiationSS` on ``dofs``), A and
+    B are the time-domain radiation model's own, ``A∞ + Im K̂(ω)/ω`` and ``Re K̂(ω)``.
     """
     m = co.matrix(coeffs, "mass", dofs)
-    a = co.at_frequency(coeffs, "added_mass", omega, dofs)
-    b = co.at_frequency(coeffs, "radiation_damping", omega, dofs)
+    if radiation_ss is None:
+        a = co.at_frequency(coeffs, "added_mass", omega, dofs)
+        b = co.at_frequency(coeffs, "radiation_damping", omega, dofs)
+    else:
+        a = co.matrix(coeffs, "added_mass_inf", dofs) + radiation_ss.equivalent_added_mass(omega)
+        b = radiation_ss.equivalent_damping(omega)
     c = co.matrix(coeffs, "hydrostatic_stiffness", dofs)
     z = -omega**2 * (m + a) + 1j * omega * (b + damping) + c + stiffness
     return np.linalg.solve(z, np.asarray(force, dtype=complex))
@@ -144,42 +160,56 @@ def frequency_response(coeffs: xr.Dataset, omega: float, force: np.ndarray,
 
 def rao_point(coeffs: xr.Dataset, forces: Sequence[KnownComponent], period: float, *,
               stiffness: np.ndarray, damping: np.ndarray, dofs: Sequence[str] = DOFS,
-              quick: bool = False) -> dict[str, Any]:
-    """One regular wave: time-domain steady-state amplitude per DOF against the frequency
-    domain, both per unit wave amplitude (m/m, rad/m).
+              quick: bool = False, direction: float = 0.0, radiation_ss: Any = None,
+              max_dt: float | None = None) -> dict[str, Any]:
+    """One regular wave travelling towards ``direction`` [rad]: time-domain steady-state
+    amplitude per DOF against the frequency domain, both per unit wave amplitude (m/m, rad/m).
 
     The run ramps the excitation over 300 s (so the slow surge mode is hardly excited) and
     fits the last whole wave periods; F̂_exc is fitted from the same run's ``F_exc`` so that
-    both sides see the identical excitation (BEM F_e interpolated at ω).
+    both sides see the identical excitation (BEM F_e interpolated at ω). The relative error
+    is NaN for a DOF the wave does not move (frequency-domain amplitude exactly 0).
+    The step is T/40, at most ``max_dt`` [s] (a radiation state space with fast poles
+    needs it for the RK4 stability). ``radiation_ss`` as in :func:`decay_histories`; with
+    it the result also holds the
+    frequency domain of that radiation model (``frequency_domain_ss``, ``relative_error_ss``:
+    the time integration alone, without the state-space fit's and the coefficients' own
+    Kramers-Kronig differences).
     """
     omega = 2.0 * math.pi / period
     amp = RAO_HEIGHT / 2.0
-    dt = period / 40.0
+    dt = period / 40.0 if max_dt is None else min(period / 40.0, float(max_dt))
     duration = 1500.0 if quick else 2500.0
     hist = simulate(coeffs, dofs=dofs, duration=duration, dt=dt,
-                    wave=Regular(period=period, height=RAO_HEIGHT), ramp=300.0,
-                    forces=list(forces))
+                    wave=Regular(period=period, height=RAO_HEIGHT, direction=direction),
+                    ramp=300.0, forces=list(forces), radiation_ss=radiation_ss)
     t = hist["time"].values
     n_per = int(math.floor(600.0 / period))
     sel = t >= t[-1] - n_per * period - 1e-9
     td = harmonic_amplitude(t[sel], hist["z"].values[sel], omega) / amp
     f_hat = harmonic_amplitude(t[sel], hist["F_exc"].values[sel], omega) / amp
-    fd = frequency_response(coeffs, omega, f_hat, stiffness, damping, dofs)
-    return {"period": period, "omega": omega,
-            "time_domain": {d: float(abs(td[i])) for i, d in enumerate(dofs)},
-            "frequency_domain": {d: float(abs(fd[i])) for i, d in enumerate(dofs)},
-            "relative_error": {d: float(abs(abs(td[i]) - abs(fd[i])) / abs(fd[i]))
-                               for i, d in enumerate(dofs)}}
+    out = {"period": period, "omega": omega, "direction": direction,
+           "time_domain": {d: float(abs(td[i])) for i, d in enumerate(dofs)}}
+    models = {"": None} if radiation_ss is None else {"": None, "_ss": radiation_ss}
+    for suffix, model in models.items():
+        fd = frequency_response(coeffs, omega, f_hat, stiffness, damping, dofs, model)
+        ref = np.where(np.abs(fd) > 0, np.abs(fd), np.nan)
+        out[f"frequency_domain{suffix}"] = {d: float(abs(fd[i])) for i, d in enumerate(dofs)}
+        out[f"relative_error{suffix}"] = {d: float(abs(abs(td[i]) - abs(fd[i])) / ref[i])
+                                          for i, d in enumerate(dofs)}
+    return out
 
 
 def rao_curve(coeffs: xr.Dataset, stiffness: np.ndarray, damping: np.ndarray,
-              omegas: np.ndarray, dofs: Sequence[str] = DOFS) -> np.ndarray:
-    """|X(ω)|/a on ``omegas`` (n_ω, n_dof) with F̂ = F_e(ω) interpolated like the time domain."""
+              omegas: np.ndarray, dofs: Sequence[str] = DOFS, direction: float = 0.0
+              ) -> np.ndarray:
+    """|X(ω)|/a on ``omegas`` (n_ω, n_dof) with F̂ = F_e(ω) interpolated like the time domain,
+    waves towards ``direction`` [rad]."""
     out = np.empty((omegas.size, len(dofs)))
     t = np.array([0.0])
     for k, w in enumerate(omegas):
         # F_exc(0) and F_exc(T/4) of a unit-amplitude wave give Re and -Im of F̂ (e^{iωt})
-        wave = Regular(period=2 * math.pi / w, height=2.0)
+        wave = Regular(period=2 * math.pi / w, height=2.0, direction=direction)
         f0 = excitation_force(wave, coeffs, t, list(dofs))[0]
         f1 = excitation_force(wave, coeffs, t + 0.5 * math.pi / w, list(dofs))[0]
         out[k] = np.abs(frequency_response(coeffs, w, f0 - 1j * f1, stiffness, damping, dofs))

@@ -175,6 +175,66 @@ def _match(w_file: np.ndarray, w_ref: np.ndarray, name: str) -> np.ndarray:
     return idx
 
 
+def _pair_matrix(entries: dict, pos: dict[int, int], n: int, pick) -> np.ndarray:
+    """(n, n) matrix of ``pick(value)`` at the modes' positions ``pos`` (absent pairs: 0)."""
+    out = np.zeros((n, n))
+    for (i, j), val in entries.items():
+        out[pos[i], pos[j]] = pick(val)
+    return out
+
+
+def _radiation(p1: Path, rho: float, ulen: float, frequency_input: bool):
+    """ω, DOFs, A(ω), B(ω) ``[ω, influenced, radiating]`` and the limits ``{0: A(0), inf:
+    A(∞)}`` (None when absent) of a ``.1`` file, dimensional (module docstring)."""
+    finite, limits = _read_1(p1, frequency_input)
+    omega = np.array(sorted(finite))
+    modes = sorted({m for d in (*finite.values(), *limits.values()) for pair in d for m in pair})
+    dofs = [RIGID_DOFS[m - 1] for m in modes]
+    pos = {m: k for k, m in enumerate(modes)}
+    n = len(modes)
+    # scale[i, j] = L^(k) for the pair; rotations add one length each
+    lpow = np.array([[n_rotations(a, b) for b in dofs] for a in dofs])
+    rad_scale = rho * ulen ** (3 + lpow)
+
+    def matrix(entries: dict, pick) -> np.ndarray:
+        return _pair_matrix(entries, pos, n, pick)
+
+    a = np.array([matrix(finite[w], lambda v: v[0]) for w in omega]) * rad_scale
+    b = np.array([matrix(finite[w], lambda v: v[1]) for w in omega]) * rad_scale \
+        * omega[:, None, None]
+    lim = {w: (matrix(limits[w], float) * rad_scale if limits[w] else None) for w in limits}
+    return omega, dofs, a, b, lim
+
+
+def read_radiation(path: str | Path, *, rho: float, ulen: float = 1.0,
+                   frequency_input: bool = False) -> xr.Dataset:
+    """Only the radiation coefficients of a ``ROOT.1`` file (no ``.3``/``.hst`` needed), e.g. a
+    reference solution to check a BEM run against.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``added_mass`` [kg, kg m, kg m²] and ``radiation_damping`` [N s/m, …] on (omega,
+        influenced_dof, radiating_dof), ``added_mass_inf`` and ``added_mass_zero`` on
+        (influenced_dof, radiating_dof) (NaN without limit rows); dimensional with ``rho``
+        [kg/m³] and ``ulen`` [m].
+    """
+    p1 = Path(path)
+    if not p1.is_file():
+        raise InputError(f"WAMIT file {p1} not found")
+    omega, dofs, a, b, lim = _radiation(p1, positive(rho, "rho"), positive(ulen, "ulen"),
+                                        frequency_input)
+    pair = ("influenced_dof", "radiating_dof")
+    nan = np.full((len(dofs), len(dofs)), np.nan)
+    return xr.Dataset(
+        {"added_mass": (("omega", *pair), a), "radiation_damping": (("omega", *pair), b),
+         "added_mass_inf": (pair, nan if lim[math.inf] is None else lim[math.inf]),
+         "added_mass_zero": (pair, nan if lim[0.0] is None else lim[0.0])},
+        coords={"omega": ("omega", omega, {"units": "rad/s"}), "influenced_dof": dofs,
+                "radiating_dof": dofs},
+        attrs={"source": f"WAMIT {p1.name}", "rho": rho, "ulen": ulen})
+
+
 def read(path: str | Path, *, rho: float | None, g: float | None, ulen: float = 1.0,
          frequency_input: bool = False, water_depth: float = math.inf) -> xr.Dataset:
     """Read ``ROOT.1`` with its siblings ``ROOT.3`` and ``ROOT.hst`` into a coefficient Dataset.
@@ -198,26 +258,13 @@ def read(path: str | Path, *, rho: float | None, g: float | None, ulen: float = 
     rho, g, ulen = positive(rho, "rho"), positive(g, "g"), positive(ulen, "ulen")
     root = root_of(Path(path))
     p1, p3, phst = sibling(root, ".1"), sibling(root, ".3"), sibling(root, ".hst")
-    finite, limits = _read_1(p1, frequency_input)
-    omega = np.array(sorted(finite))
-    modes = sorted({m for d in (*finite.values(), *limits.values()) for pair in d for m in pair})
-    dofs = [RIGID_DOFS[m - 1] for m in modes]
-    pos = {m: k for k, m in enumerate(modes)}
-    n = len(modes)
-    # scale[i, j] = L^(k) for the pair; rotations add one length each
-    lpow = np.array([[n_rotations(a, b) for b in dofs] for a in dofs])
-    rad_scale = rho * ulen ** (3 + lpow)
+    omega, dofs, a, b, lim = _radiation(p1, rho, ulen, frequency_input)
+    n = len(dofs)
+    pos = {RIGID_DOFS.index(d) + 1: k for k, d in enumerate(dofs)}
+    lpow = np.array([[n_rotations(x, y) for y in dofs] for x in dofs])
 
     def matrix(entries: dict, pick) -> np.ndarray:
-        out = np.zeros((n, n))
-        for (i, j), val in entries.items():
-            out[pos[i], pos[j]] = pick(val)
-        return out
-
-    a = np.array([matrix(finite[w], lambda v: v[0]) for w in omega]) * rad_scale
-    b = np.array([matrix(finite[w], lambda v: v[1]) for w in omega]) * rad_scale \
-        * omega[:, None, None]
-    lim = {w: (matrix(limits[w], float) * rad_scale if limits[w] else None) for w in limits}
+        return _pair_matrix(entries, pos, n, pick)
 
     exc_rows = _read_3(p3, frequency_input)
     w3 = np.array(sorted({w for w, _ in exc_rows}))

@@ -1,0 +1,214 @@
+"""OC4-DeepCwind semi: the shipped BEM coefficients (found by input hash, against WAMIT), the
+natural frequencies of the six rigid-body modes, decays and RAOs in six DOFs at three headings
+(issue 30 items 2, 5).
+
+References: WAMIT's solution of the definition (OpenFAST r-test ``marin_semi``, trimmed rows in
+tests/data/oc4_wamit), the OC4 phase II code comparison's natural frequencies as quoted in
+``cases/oc4_semi.toml``, and the frequency-domain solution of the same linear system.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from hybridwsi.casemodel import bem_arguments
+from hybridwsi.cases import load_case
+from hybridwsi.dofs import RIGID_DOFS
+from hybridwsi.history import read_netcdf
+from hybridwsi.hydro import bem
+from hybridwsi.hydro import coefficients as co
+from hybridwsi.hydro.formats.wamit import read_radiation
+from hybridwsi.hydro.modal import natural_frequencies
+from hybridwsi.hydro.strip import case_elements, with_slender_members
+from hybridwsi.report.fowt_semi import (SemiSystem, semi_decays, semi_modes, semi_raos,
+                                       semi_system)
+
+CASE = load_case("oc4_semi")
+SHIPPED = bem.PAPER_COEFFS.parent / "bem_oc4_semi.nc"
+WAMIT = Path(__file__).parent / "data" / "oc4_wamit" / "marin_semi_trimmed.1"
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the known A(0) flag (finite depth)
+        return read_netcdf(SHIPPED)
+
+
+@pytest.fixture(scope="module")
+def system() -> SemiSystem:
+    pytest.importorskip("moorpy")
+    return semi_system(CASE)  # the shipped coefficients (no solve) + strip theory
+
+
+# ------------------------------------------------------------------------- the shipped file
+def test_shipped_file_is_found_by_its_inputs(shipped):
+    plan = bem.plan(**bem_arguments(CASE))
+    assert shipped.attrs["input_hash"] == plan.input_hash
+    assert list(co.dofs(shipped)) == list(RIGID_DOFS)
+    assert shipped["wave_direction"].values == pytest.approx(np.radians([0.0, 30.0, 60.0]))
+    assert np.allclose(shipped.attrs["reference_point"], 0.0)
+    assert shipped.sizes["omega"] == CASE["bem"]["n_omega"]
+    assert np.all(np.isfinite(co.matrix(shipped, "added_mass_inf")))
+    # diagonal damping >= 0 but for values at round-off level, flagged by compute: finite-depth
+    # yaw at 0.16-0.35 rad/s (down to -1.66e4 N m s/rad, 3e-6 of the yaw peak 5.2e9) and
+    # heave above 2.2 rad/s (-16 N s/m, 2e-5 of its peak); excitation finite everywhere
+    diag = np.diagonal(co.matrix_omega(shipped, "radiation_damping"), axis1=1, axis2=2)
+    assert np.all(diag >= -1e-4 * np.abs(diag).max(axis=0))
+    assert "negative diagonal radiation damping" in shipped.attrs["quality_flags"]
+    assert np.all(np.isfinite(shipped["excitation_force"].values))
+
+
+def test_compute_returns_the_shipped_file_without_solving(tmp_path, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("BEM solve attempted")
+
+    monkeypatch.setattr(bem, "_solve_missing", refuse)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = bem.compute(**bem_arguments(CASE), cache_dir=tmp_path, progress=False)
+    assert ds.attrs["input_hash"] == bem.plan(**bem_arguments(CASE)).input_hash
+
+
+def test_symmetry_of_the_coefficients(shipped):
+    """Three-fold symmetry with mirror lines at 0°, 60°, 120°: A11 = A22, A44 = A55,
+    A15 = -A24; waves along a mirror line (headings 0° and 60°) push along it and neither
+    yaw nor heel the platform about it; at 30° everything is excited."""
+    a = co.matrix(shipped, "added_mass_inf")
+    assert a[0, 0] == pytest.approx(a[1, 1], rel=1e-6)
+    assert a[3, 3] == pytest.approx(a[4, 4], rel=1e-6)
+    assert a[0, 4] == pytest.approx(-a[1, 3], rel=1e-6)
+    fe = shipped["excitation_force"].transpose("omega", "wave_direction", "influenced_dof").values
+    force = np.abs(fe[..., :2]).max()
+    moment = np.abs(fe[..., 3:5]).max()
+    for j, beta in ((0, 0.0), (2, math.radians(60.0))):
+        c, s = math.cos(beta), math.sin(beta)
+        assert np.all(np.abs(-fe[:, j, 0] * s + fe[:, j, 1] * c) <= 1e-5 * force)  # across
+        assert np.all(np.abs(fe[:, j, 3] * c + fe[:, j, 4] * s) <= 1e-5 * moment)  # heel about
+        assert np.all(np.abs(fe[:, j, 5]) <= 1e-5 * moment)  # yaw
+    assert np.all(np.abs(fe[:, 1, [1, 3, 5]]) > 0)
+
+
+def test_added_mass_and_damping_against_wamit(shipped):
+    """WAMIT (marin_semi: columns, heave plates, pontoons, braces) at its three finite periods
+    against the shipped Capytaine columns + the slender members by strip theory (added mass
+    only: their radiation damping is negligible). Tolerances from the measured differences and
+    the panel convergence (docs/OC4_SEMI.md, "Against WAMIT")."""
+    ref = read_radiation(WAMIT, rho=1025.0)
+    ours = with_slender_members(shipped, case_elements(CASE))
+    for k, w in enumerate(ref["omega"].values):
+        a = co.at_frequency(ours, "added_mass", w)
+        b = co.at_frequency(ours, "radiation_damping", w)
+        ra = ref["added_mass"].values[k]
+        rb = ref["radiation_damping"].values[k]
+        for i in (0, 2, 4, 5):  # measured within 3.2 %
+            assert a[i, i] == pytest.approx(ra[i, i], rel=0.04), (w, i)
+        # damping from the shipped grid interpolated linearly across steep peaks (measured
+        # within 13 %; at WAMIT's exact frequencies: docs/OC4_SEMI.md)
+        for i in (0, 2, 4, 5):
+            assert b[i, i] == pytest.approx(rb[i, i], rel=0.15), (w, i)
+
+
+# ------------------------------------------------------------------------- natural frequencies
+def test_natural_frequencies_of_the_six_modes(system):
+    """Heave within 3 % of the code comparison (measured +0.2 %). Surge/sway (-4.9 %) and
+    roll/pitch (+5 %) are not: with the infinite-frequency added mass held (as a 60 s
+    radiation kernel leaves the slow surge mode) the surge frequency is the quoted 0.0093 Hz,
+    and pitch with surge held is within 3 % of the quoted 0.0373 Hz (docs/OC4_SEMI.md)."""
+    modes = {m.dominant_dof: m for m in semi_modes(system)}
+    assert set(modes) == set(RIGID_DOFS)
+    ref = CASE["reference_natural_frequencies"]
+    assert modes["Heave"].frequency == pytest.approx(ref["heave"], rel=0.03)
+    assert modes["Surge"].frequency == pytest.approx(modes["Sway"].frequency, rel=1e-4)
+    assert modes["Roll"].frequency == pytest.approx(modes["Pitch"].frequency, rel=1e-3)
+    m = co.matrix(system.coeffs, "mass") + co.matrix(system.coeffs, "added_mass_inf")
+    c = co.matrix(system.coeffs, "hydrostatic_stiffness") + system.mooring
+    held = np.sort(np.sqrt(scipy.linalg.eigvals(c, m).real)) / (2 * math.pi)
+    assert held[0] == pytest.approx(ref["surge"], rel=0.03)
+    pitch_alone = natural_frequencies(system.coeffs, system.mooring[4:5, 4:5], ["Pitch"])[0]
+    assert pitch_alone.frequency == pytest.approx(ref["pitch"], rel=0.03)
+
+
+def test_natural_frequencies_with_wamits_added_mass(system):
+    """The same eigen-analysis (mass, hydrostatics, MoorPy mooring) with WAMIT's added mass in
+    place of Capytaine's: every mode within 3 % (independent hydrodynamics)."""
+    ref = read_radiation(WAMIT, rho=1025.0)
+    ours = {m.dominant_dof: m.frequency for m in semi_modes(system)}
+    wamit = system.coeffs.copy(deep=True)
+    pair = ("radiating_dof", "influenced_dof")
+    strip = co.matrix(system.coeffs, "added_mass_inf") - co.matrix(
+        read_netcdf(SHIPPED), "added_mass_inf")  # the slender members' A_m
+    omega = np.concatenate([[1e-6], ref["omega"].values])
+    a = np.concatenate([ref["added_mass_zero"].values[None], ref["added_mass"].values]) + strip
+    wamit = wamit.drop_dims("omega").assign_coords(omega=omega)
+    wamit["added_mass"] = (("omega", *pair), np.transpose(a, (0, 2, 1)))
+    modes = {m.dominant_dof: m.frequency
+             for m in natural_frequencies(wamit, system.mooring, list(RIGID_DOFS))}
+    for dof in RIGID_DOFS:
+        assert ours[dof] == pytest.approx(modes[dof], rel=0.03), dof
+
+
+# ------------------------------------------------------------------------- RAOs
+def test_oblique_sea_moves_sway_roll_and_yaw(system):
+    """At 30° the frequency-domain sway, roll and yaw responses are non-zero (at 0° they vanish
+    by symmetry)."""
+    from hybridwsi.report.fowt_semi import semi_rao_curves
+
+    w = np.array([0.5, 0.8])
+    curves = semi_rao_curves(system, w, [0.0, 30.0])
+    head, oblique = curves
+    assert np.all(head[:, [1, 3, 5]] < 1e-9 * head[:, [0, 4, 4]].max())
+    assert np.all(oblique[:, 1] > 0.1 * oblique[:, 0])       # sway ~ tan 30° x surge
+    assert np.all(oblique[:, 3] > 0.1 * oblique[:, 4])       # roll
+    assert np.all(oblique[:, 5] > 1e-5)                      # yaw [rad/m]
+
+
+def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
+    """The 6-DOF radiation model of the time domain: balanced fit (every DOF weighed alike),
+    stable coupled system, B(ω) within 2 % RMS of the BEM's; A(ω) of heave and pitch within
+    0.5 %, surge within 3.5 % (the kernel's low-frequency A11 sits 1.3 % above the BEM's)."""
+    ss = system.radiation_ss
+    assert ss.fit_error["frequency_bem"] < 0.02
+    assert np.all(ss.poles.real < 0)
+    ainf = co.matrix(system.coeffs, "added_mass_inf")
+    for w in np.linspace(0.3, 1.3, 21):
+        a = np.diag(ainf + ss.equivalent_added_mass(w))
+        ref = np.diag(co.at_frequency(system.coeffs, "added_mass", w))
+        assert np.abs(a / ref - 1)[[2, 4]].max() < 0.005
+        assert np.abs(a / ref - 1)[[0, 5]].max() < 0.035
+
+
+def test_decays_follow_the_eigen_analysis(system):
+    """Free decays in all six DOFs (linear mooring, linearised drag, radiation state space):
+    zero-crossing frequencies within 2 % of the eigen-analysis (the surge decay sees the
+    state-space model's A11, 1.3 % above the BEM's at low frequency)."""
+    decays = semi_decays(system)
+    modes = {m.dominant_dof: m.frequency for m in semi_modes(system)}
+    for dof, d in decays.items():
+        assert d["hz"] == pytest.approx(modes[dof], rel=0.02), dof
+
+
+@pytest.mark.slow
+def test_raos_time_domain_against_frequency_domain(system):
+    """Six DOFs, three headings: the Cummins run's steady-state amplitudes equal the frequency
+    domain of the same linear system (its radiation state space) within 1 %; against the
+    BEM's A(ω), B(ω) heave within 0.2 %, surge and sway 2 %, the rotations 8 % (their small
+    responses near 17-30 s magnify the radiation model's 1-3 % in A11, A15; docs)."""
+    points = semi_raos(system, [7.0, 11.0, 17.0, 22.0], [0.0, 30.0, 60.0], quick=True)
+    bound = {"Surge": 0.02, "Sway": 0.02, "Heave": 0.002, "Roll": 0.08, "Pitch": 0.08,
+             "Yaw": 0.08}
+    for p in points:
+        scale = {"m": max(p["frequency_domain"][d] for d in ("Surge", "Sway", "Heave")),
+                 "rad": max(p["frequency_domain"][d] for d in ("Roll", "Pitch", "Yaw"))}
+        for d in RIGID_DOFS:
+            unit = "m" if d in ("Surge", "Sway", "Heave") else "rad"
+            if p["frequency_domain"][d] > 1e-3 * scale[unit]:
+                where = (p["heading_deg"], p["period"], d)
+                assert p["relative_error_ss"][d] < 0.01, where
+                assert p["relative_error"][d] < bound[d], where
