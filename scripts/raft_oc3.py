@@ -41,7 +41,6 @@ speed and pitch); 2 with the PI controller.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -61,6 +60,7 @@ sys.path.insert(0, str(ROOT / "src"))
 import rotor_table as rt  # noqa: E402  (the blade and controller constants)
 
 from hybridwsi.files import write_json  # noqa: E402
+from hybridwsi.cli import Parser  # noqa: E402
 
 OUT = ROOT / "docs" / "figures" / "raft_oc3_rotor.json"
 CASE = ROOT / "src" / "hybridwsi" / "cases" / "oc3_hywind.toml"
@@ -248,7 +248,7 @@ def run(case: dict, aero_servo: int, gains: tuple[float, float], ballast: tuple)
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
     t0 = time.time()
@@ -283,4 +283,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from hybridwsi.cli import run_script
+
+    run_script(main)

@@ -249,4 +249,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from hybridwsi.cli import run_script
+
+    run_script(main)

@@ -78,6 +78,7 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from hybridwsi.files import to_netcdf  # noqa: E402
 from hybridwsi.forces.controller import baseline_torque_law  # noqa: E402
+from hybridwsi.cli import Parser  # noqa: E402
 
 OUT = ROOT / "src" / "hybridwsi" / "data" / "rotor_nrel5mw.nc"
 
@@ -347,7 +348,7 @@ def provenance(ds: xr.Dataset, rotor: Rotor, args: argparse.Namespace, seconds: 
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = Parser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--quick", action="store_true", help="1 m/s steps (a look, not shipped)")
     args = ap.parse_args(argv)
@@ -373,4 +374,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from hybridwsi.cli import run_script
+
+    run_script(main)
