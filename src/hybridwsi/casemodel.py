@@ -19,7 +19,11 @@ component           TimeHistory variable  from
                                           ``quasi-static`` (MoorPy every call), ``moordyn``
 ``morison``         ``F_morison``         ``[hydrodynamics] drag_cd``, ``[drag]``, the hull;
                                           a ``columns`` hull: its members' drag
-``rotor``           ``F_rotor``           ``[rotor]``
+``rotor``           ``F_rotor``           ``[rotor]`` (``state``, ``wind_speed``,
+                                          ``turbulence_intensity``; ``--rotor``,
+                                          ``--wind-speed``, ...)
+``drift``           ``F_drift``           ``[drift]`` when ``[forces] drift`` is on and the run
+                                          has a sea: Newman's slow drift
 ``linear_damping``  ``F_damping``         ``[hydrodynamics] additional_damping``
 ``external_force``  ``F_external``        ``[external_force] file`` (a force table)
 ==================  ====================  ==================================================
@@ -27,7 +31,9 @@ component           TimeHistory variable  from
 :meth:`CaseModel.simulate` records every component separately (N or N m per DOF, their sum is
 the history's ``F_ext``), the wave elevation ``eta`` and, for a mooring component that says
 them (:class:`~hybridwsi.forces.mooring.LineTensions`), the line tensions ``T_fairlead`` and
-``T_anchor`` (dims ``time``, ``line``; N).
+``T_anchor`` (dims ``time``, ``line``; N). A run starts from the static equilibrium under the
+components' mean forces (the rotor's thrust, the slow drift's mean: :meth:`CaseModel.
+mean_offset`), recorded in ``attrs["mean_offset"]``.
 
 Everything a Dask sweep's seas share (coefficients, radiation state space, mooring table) is
 in one picklable :class:`CaseModel`, built once on the client (:meth:`CaseModel.build`).
@@ -47,13 +53,14 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+import scipy.optimize
 import xarray as xr
 
 from hybridwsi import cummins
 from hybridwsi.bodies import FloatingSphere, body_from_dict
-from hybridwsi.cases import Case, load_case, mooring_model
+from hybridwsi.cases import Case, load_case, mooring_model, with_values
 from hybridwsi.dofs import check_dofs, index
-from hybridwsi.errors import InputError
+from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import (
     Hydrostatic,
     KnownComponent,
@@ -65,6 +72,7 @@ from hybridwsi.forces import (
     additional_damping,
     rotor_from_case,
 )
+from hybridwsi.forces.drift import SlowDriftForce
 from hybridwsi.forces.mooring import LineTensions, MooringTable, QuasiStaticMooring
 from hybridwsi.history import TextTable, quantity_of, units_attrs
 from hybridwsi.hydro import bem
@@ -77,7 +85,8 @@ from hybridwsi.waves import ElevationRecord, Wave
 
 #: component name -> TimeHistory variable of its force
 COMPONENT_VARIABLES = {"mooring": "F_mooring", "morison": "F_morison", "rotor": "F_rotor",
-                       "linear_damping": "F_damping", "external_force": "F_external"}
+                       "linear_damping": "F_damping", "external_force": "F_external",
+                       "drift": "F_drift"}
 #: the module m1-moordyn's MoorDyn component lives in (``MoorDynForce.from_case``)
 MOORDYN_MODULE = "hybridwsi.forces.moordyn"
 #: largest share of a wave-elevation record's variance above the BEM frequencies accepted
@@ -346,15 +355,16 @@ def mooring_component(case: Case, dofs: Sequence[str], model: str, *,
 
 def case_components(case: Case, dofs: Sequence[str], *, wave: Wave | None = None,
                     ramp: float = 0.0, mooring: str | None = None,
-                    mooring_table: MooringTable | None = None, dt: float | None = None
-                    ) -> dict[str, KnownComponent]:
+                    mooring_table: MooringTable | None = None, dt: float | None = None,
+                    sea: Wave | None = None) -> dict[str, KnownComponent]:
     """The force components of a case on ``dofs``, by name (:data:`COMPONENT_VARIABLES`), as
     switched on by its ``[forces]`` table.
 
     ``wave``: the Morison drag's wave particle velocity (ramped like the excitation over
     ``ramp`` [s]); None: the drag on the body velocity alone. ``mooring``: the model
     (:func:`hybridwsi.cases.mooring_model`, default the case's); ``mooring_table``: the table
-    model's interpolant if built already; ``dt``: the solver's step (MoorDyn).
+    model's interpolant if built already; ``dt``: the solver's step (MoorDyn); ``sea``: the
+    run's sea, which drives the slow drift (default ``wave``; no sea, no drift).
     """
     on = case["forces"]
     model = mooring_model(case, mooring)
@@ -371,6 +381,9 @@ def case_components(case: Case, dofs: Sequence[str], *, wave: Wave | None = None
         out["linear_damping"] = additional_damping(case, dofs)
     if on["external_force"]:
         out["external_force"] = force_table(case["external_force"]["file"], dofs)
+    sea = sea if sea is not None else wave
+    if on.get("drift") and sea is not None:
+        out["drift"] = SlowDriftForce.from_case(case, dofs, wave=sea, ramp=ramp)
     return out
 
 
@@ -498,7 +511,8 @@ class CaseModel:
     def build(cls, case: str | os.PathLike | Case, *, dofs: Sequence[str] | str | None = None,
               coeffs: str | os.PathLike | xr.Dataset | None = None, mooring: str | None = None,
               dt: float | None = None, quick: bool = False,
-              cache_dir: str | os.PathLike | None = None, progress: bool = False) -> CaseModel:
+              cache_dir: str | os.PathLike | None = None, progress: bool = False,
+              overrides: Mapping[str, Mapping[str, Any]] | None = None) -> CaseModel:
         """Load the case, get its coefficients and build what every run shares.
 
         Parameters
@@ -515,8 +529,12 @@ class CaseModel:
             Time step [s]: fits the radiation state space once for it.
         quick : bool
             The coarse ``[bem_quick]`` table (tests).
+        overrides : mapping, optional
+            Entries of the case's tables replaced (:func:`hybridwsi.cases.with_values`; the
+            command line's ``--rotor``, ``--wind-speed``, ``--slow-drift``, ...:
+            :func:`run_overrides`).
         """
-        case = load_case(case)
+        case = with_values(load_case(case), overrides or {})
         coeffs = case_coefficients(case, coeffs=coeffs, quick=quick, cache_dir=cache_dir,
                                    progress=progress)
         have = cf.dofs(coeffs)
@@ -541,11 +559,53 @@ class CaseModel:
             raise InputError(f"{self.case.label}: body: {exc}") from None
 
     def components(self, *, wave: Wave | None = None, ramp: float = 0.0,
-                   dt: float | None = None) -> dict[str, KnownComponent]:
+                   dt: float | None = None, sea: Wave | None = None
+                   ) -> dict[str, KnownComponent]:
         """:func:`case_components` of this model (its DOFs, mooring model and table)."""
         return case_components(self.case, self.dofs, wave=wave, ramp=ramp,
                                mooring=self.mooring, mooring_table=self.mooring_table,
-                               dt=dt if dt is not None else self.dt)
+                               dt=dt if dt is not None else self.dt, sea=sea)
+
+    def mean_offset(self, components: Mapping[str, KnownComponent]) -> np.ndarray:
+        """The static equilibrium [m, rad per DOF] under the components' mean forces.
+
+        Solves ``Σ_k F̄_k + F_moor(q) − C q = 0`` for ``q``: ``F̄_k`` the ``mean_force()`` of
+        every component that has one (the rotor's thrust and torque at the mean wind, the slow
+        drift's realisation mean), ``C`` the coefficients' hydrostatic stiffness (linear, also
+        for a run with nonlinear hydrostatics), ``F_moor`` the mooring's static force: the
+        ``table`` or ``quasi-static`` component itself, MoorPy solved at ``q`` for MoorDyn
+        (whose statics agree with MoorPy's within 1 %: docs/OC3_HYWIND.md). Zero when no
+        component has a mean force, so a parked run starts at rest as before.
+
+        Raises
+        ------
+        SolverError
+            No equilibrium found (e.g. a thrust larger than the mooring can hold).
+        """
+        n = len(self.dofs)
+        means = [np.asarray(c.mean_force(), dtype=float).reshape(n)
+                 for c in components.values() if callable(getattr(c, "mean_force", None))]
+        total = np.sum(means, axis=0) if means else np.zeros(n)
+        if not np.any(total):
+            return np.zeros(n)
+        stiffness = cf.matrix(self.coeffs, "hydrostatic_stiffness", self.dofs)
+        mooring = components.get("mooring")
+        if self.mooring == "moordyn":
+            mooring = QuasiStaticMooring.from_case(self.case, self.dofs)
+        still, empty = np.zeros(n), np.zeros(0)
+
+        def residual(q: np.ndarray) -> np.ndarray:
+            f = total - stiffness @ q
+            return f if mooring is None else f + mooring.ode_force(0.0, q, still, empty)
+
+        k = stiffness + (0.0 if mooring is None else mooring.linear_coefficients(n)[2])
+        first = np.linalg.lstsq(k, total, rcond=None)[0]
+        sol = scipy.optimize.root(residual, first, method="hybr")
+        scale = max(float(np.max(np.abs(total))), 1.0)
+        if not sol.success or float(np.max(np.abs(residual(sol.x)))) > 1e-6 * scale:
+            raise SolverError(f"{self.case.label}: no static equilibrium under the mean forces "
+                              f"{np.array2string(total, precision=4)} N, N m ({sol.message})")
+        return sol.x
 
     def settings(self) -> dict[str, Any]:
         """The set-up as plain values (a sweep's settings hash): the case's content hash, the
@@ -563,8 +623,8 @@ class CaseModel:
                  z0: float | Sequence[float] = 0.0, zdot0: float | Sequence[float] = 0.0,
                  ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False,
                  extra: Mapping[str, KnownComponent] | None = None,
-                 radiation: str | None = None, hydrostatics: str | None = None
-                 ) -> xr.Dataset:
+                 radiation: str | None = None, hydrostatics: str | None = None,
+                 from_offset: bool = True) -> xr.Dataset:
         """One Cummins run of the case → TimeHistory with every component recorded.
 
         Parameters
@@ -574,7 +634,8 @@ class CaseModel:
         wave : Wave, optional
             Regular, JONSWAP or a recorded elevation (:func:`elevation_wave`).
         z0, zdot0 : float or sequence
-            Initial displacement [m, rad] and velocity per DOF (a decay).
+            Initial displacement [m, rad] and velocity per DOF (a decay), about the mean
+            offset when ``from_offset``.
         ramp : float
             Half-cosine ramp [s] of the excitation and of the drag's wave velocity.
         wave_kinematics : bool
@@ -586,6 +647,10 @@ class CaseModel:
         radiation, hydrostatics : str, optional
             Instead of the case's ``[forces]`` models (``statespace``/``convolution``/``none``;
             ``linear``/``nonlinear``).
+        from_offset : bool
+            Start from the static equilibrium under the mean forces (:meth:`mean_offset`: the
+            operating rotor's thrust, the slow drift's mean), so the run does not begin with a
+            surge transient of the slow mode (~125 s period on OC3); False: from rest.
 
         Returns
         -------
@@ -596,12 +661,16 @@ class CaseModel:
         forces = {**self.case["forces"], "mooring": self.mooring,
                   **({"radiation": radiation} if radiation else {}),
                   **({"hydrostatics": hydrostatics} if hydrostatics else {})}
-        comps = self.components(wave=wave if wave_kinematics else None, ramp=ramp, dt=dt)
+        comps = self.components(wave=wave if wave_kinematics else None, ramp=ramp, dt=dt,
+                                sea=wave)
         for name, comp in (extra or {}).items():
             if name in comps:
                 raise InputError(f"{self.case.label} has its own {name} component; give it "
                                  "once")
             comps[name] = comp
+        n = len(self.dofs)
+        offset = self.mean_offset(comps) if from_offset else np.zeros(n)
+        z0 = offset + np.broadcast_to(np.asarray(z0, dtype=float), (n,))
         nonlinear = forces["hydrostatics"] == "nonlinear"
         excite = wave if forces["excitation"] else None
         ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
@@ -618,6 +687,7 @@ class CaseModel:
                                     {"units": "m", "long_name": "incident wave elevation"}))
             hist = hist.assign_coords(probe=["origin"])
         hist = record_components(hist, comps)
+        hist.attrs["mean_offset"] = json.dumps(dict(zip(self.dofs, offset.tolist())))
         hist.attrs["case"] = json.dumps({
             "name": self.case.name, "file": None if self.case.path is None
             else str(self.case.path), "sha256": self.case.sha256,

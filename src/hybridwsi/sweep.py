@@ -105,6 +105,10 @@ class SweepConfig:
     mooring : str or None
         With ``case``: the mooring model (``table``, ``quasi-static``, ``moordyn``) instead of
         the case's ``[forces] mooring``.
+    overrides : dict or None
+        With ``case``: entries of its tables replaced, ``{table: {key: value}}``
+        (:func:`hybridwsi.cases.with_values`; ``--rotor``, ``--wind-speed``,
+        ``--turbulence-intensity``, ``--wind-seed``, ``--slow-drift``).
 
     The fields from ``case`` on are left out of :func:`settings` while None, so a sphere sweep
     started by an earlier version keeps its settings hash and can be resumed.
@@ -122,6 +126,7 @@ class SweepConfig:
     wave_components: int | None = None
     wave_kinematics: bool | None = None
     mooring: str | None = None
+    overrides: dict | None = None
 
     def __post_init__(self) -> None:
         if self.dofs is not None:  # one spelling, a tuple (a TOML list or "surge,pitch")
@@ -160,6 +165,9 @@ class SweepConfig:
             if self.mooring is not None:
                 raise InputError("a mooring model (--mooring) needs a case with a mooring "
                                  "(--case)")
+            if self.overrides:
+                raise InputError("--rotor, --wind-speed, --turbulence-intensity, --wind-seed "
+                                 "and --slow-drift change a case (--case)")
             return
         if self.mass is not None:
             raise InputError("a case's body gives its mass matrix; do not give a mass with it")
@@ -173,7 +181,8 @@ SPHERE_DOFS = ("Heave",)
 CASE_SWEEP_KEYS = ("duration", "dt", "ramp", "dofs", "gamma", "wave_components",
                    "wave_kinematics")
 #: SweepConfig fields left out of the settings while None (added with cases)
-_OPTIONAL_FIELDS = ("case", "dofs", "gamma", "wave_components", "wave_kinematics", "mooring")
+_OPTIONAL_FIELDS = ("case", "dofs", "gamma", "wave_components", "wave_kinematics", "mooring",
+                    "overrides")
 
 
 def case_grid(hs: Sequence[float], tp: Sequence[float], seeds: int | Sequence[int]) -> list[dict]:
@@ -242,7 +251,8 @@ def case_setup(config: SweepConfig) -> dict:
     ``{"_model": CaseModel}`` (coefficients, DOFs, mooring model and table, radiation state
     space fitted for the sweep's dt)."""
     return {"_model": CaseModel.build(str(config.case), dofs=config.dofs, coeffs=config.coeffs,
-                                      mooring=config.mooring, dt=config.dt)}
+                                      mooring=config.mooring, dt=config.dt,
+                                      overrides=config.overrides)}
 
 
 def _public(config: dict) -> SweepConfig:

@@ -162,3 +162,31 @@ def mooring_model(case: Mapping[str, Any], override: str | None = None) -> str:
         raise InputError("--mooring moordyn: the case's [mooring] has no moordyn_file (the "
                          "MoorDyn v2 input)")
     return override
+
+
+def with_values(case: Case, updates: Mapping[str, Mapping[str, Any]]) -> Case:
+    """A copy of ``case`` with entries of its tables replaced, validated again: ``updates``
+    maps a table name to ``{key: value}`` (``{"rotor": {"wind_speed": 11.4}, "forces":
+    {"drift": True}}``; the command line's overrides). Without updates the case itself.
+
+    The copy's ``sha256`` covers the new values (a sweep's settings hash sees them); relative
+    paths stay relative to the case's folder. Starts from the file as written when there is
+    one (so the defaults the schema derives, e.g. ``[forces]``, are derived again).
+
+    Raises
+    ------
+    InputError
+        A value the schema refuses (one line naming the key).
+    """
+    updates = {k: dict(v) for k, v in updates.items() if v}
+    if not updates:
+        return case
+    raw = raw_case(case.path) if case.path is not None else dict(case)
+    for table, values in updates.items():
+        current = raw.get(table, {})
+        if not isinstance(current, Mapping):
+            raise InputError(f"{case.label}: [{table}] is not a table")
+        raw[table] = {**current, **values}
+    label = case.path.name if case.path is not None else case.name
+    return from_dict(raw, label=label, path=case.path, directory=case.directory)
+

@@ -630,7 +630,11 @@ _FORCES = Table(fields={
     "morison": Boolean(doc="Morison drag; default on when [hydrodynamics] drag_cd > 0"),
     "rotor": Boolean(doc="the rotor of [rotor]; default on when the table is present"),
     "linear_damping": Boolean(doc="[hydrodynamics] additional_damping; default on when given"),
-    "external_force": Boolean(doc="[external_force] table; default on when present")})
+    "external_force": Boolean(doc="[external_force] table; default on when present"),
+    "drift": Boolean(default=False,
+                     doc="second-order slow drift of [drift] in the run's sea (Newman's "
+                         "approximation, forces/drift.py); off unless switched on, so runs "
+                         "without it keep their results")})
 
 CASE = Table(fields={
     "name": Text(doc="default: the file name without .toml"),
@@ -776,6 +780,8 @@ def _resolve_forces(case: dict[str, Any], ctx: Context) -> None:
         on = forces[key] != "none" if key == "mooring" else forces[key]
         if on and not have:
             raise ctx.fail(("forces", key), f"is on but the case has no {what}")
+    if forces["drift"] and "drift" not in case:
+        raise ctx.fail(("forces", "drift"), "is on but the case has no [drift] table")
     if forces["mooring"] == "moordyn" and "moordyn_file" not in case["mooring"]:
         raise ctx.fail(("forces", "mooring"), "'moordyn' needs [mooring] moordyn_file (the "
                                               "MoorDyn v2 input)")

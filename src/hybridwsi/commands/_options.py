@@ -165,6 +165,61 @@ def add_mooring(p: argparse.ArgumentParser) -> None:
                         "interpolant, the default of a case with [mooring])")
 
 
+#: rotor states of ``--rotor`` (:mod:`hybridwsi.forces.rotor` STATES; the case schema's)
+ROTOR_STATES = ("parked", "thrust", "operating")
+
+
+def add_rotor(p: argparse.ArgumentParser) -> None:
+    """``--rotor``, ``--wind-speed``, ``--turbulence-intensity``, ``--wind-seed`` and
+    ``--slow-drift``/``--no-slow-drift``: the case's ``[rotor]`` and ``[forces] drift`` entries
+    replaced for this run (:func:`case_overrides`)."""
+    p.add_argument("--rotor", choices=ROTOR_STATES, default=None,
+                   help="with --case: the rotor state instead of the case's [rotor] state: "
+                        "parked (no aerodynamic force), thrust (the case's constant thrust), "
+                        "operating (the rotor in the wind of --wind-speed)")
+    p.add_argument("--wind-speed", type=positive_float, default=None, metavar="U",
+                   help="with --case: mean hub-height wind [m/s] of the operating rotor "
+                        "(implies --rotor operating)")
+    p.add_argument("--turbulence-intensity", type=nonnegative_float, default=None,
+                   metavar="TI", help="with --case: sigma/U of the hub-height wind (0: steady, "
+                                      "> 0: seeded Kaimal turbulence; implies --rotor operating)")
+    p.add_argument("--wind-seed", type=nonnegative_int, default=None, metavar="N",
+                   help="with --case: random seed of the turbulent wind's phases (implies "
+                        "--rotor operating)")
+    p.add_argument("--slow-drift", action=argparse.BooleanOptionalAction, default=None,
+                   help="with --case: the second-order slow-drift force of the case's [drift] "
+                        "table in the run's sea (Newman's approximation, F_drift) on or off, "
+                        "instead of the case's [forces] drift")
+
+
+#: option name -> [rotor] key of :func:`case_overrides`
+WIND_OPTIONS = {"wind_speed": "wind_speed", "turbulence_intensity": "turbulence_intensity",
+                "wind_seed": "wind_seed"}
+
+
+def case_overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The case entries the options of :func:`add_rotor` replace, ``{table: {key: value}}``
+    (:func:`hybridwsi.cases.with_values`); empty when none is given. A wind option implies the
+    operating rotor; with ``--rotor parked`` or ``thrust`` it is refused."""
+    rotor = {key: getattr(args, opt) for opt, key in WIND_OPTIONS.items()
+             if getattr(args, opt, None) is not None}
+    state = getattr(args, "rotor", None)
+    if rotor and state not in (None, "operating"):
+        given = ", ".join("--" + k.replace("_", "-") for k in rotor)
+        raise InputError(f"{given} set the wind of the operating rotor; not with --rotor {state}")
+    if state is not None or rotor:
+        rotor["state"] = state or "operating"
+    out: dict[str, dict[str, Any]] = {}
+    if rotor:
+        out["rotor"] = rotor
+    forces = {"rotor": True} if rotor.get("state", "parked") != "parked" else {}
+    if getattr(args, "slow_drift", None) is not None:
+        forces["drift"] = bool(args.slow_drift)
+    if forces:
+        out["forces"] = forces
+    return out
+
+
 def add_eta(p: argparse.ArgumentParser) -> None:
     """``--eta COL``: the wave-elevation column/channel of a CSV or OpenFAST file."""
     p.add_argument("--eta", metavar="COL", default=None,

@@ -40,7 +40,10 @@ DESCRIPTION = (
     "reference point; its excitation force from the coefficients' transfer function). Writes "
     "a TimeHistory NetCDF with z, zdot, zddot, the forces F_tot, F_hs, F_rad_inf, F_rad_mem, "
     "F_exc, F_ext, each case component separately (F_mooring, F_morison, F_rotor, F_damping, "
-    "F_external), the line tensions T_fairlead, T_anchor and eta."
+    "F_external, F_drift), the line tensions T_fairlead, T_anchor and eta. --rotor, "
+    "--wind-speed, --turbulence-intensity, --wind-seed and --slow-drift replace the case's "
+    "rotor and slow-drift settings; a run with a mean force (rotor thrust, drift) starts from "
+    "its static offset."
 )
 #: defaults without a case (a case's [simulation], then [sweep] table replaces them)
 DEFAULTS = {"duration": 30.0, "dt": 0.01, "gamma": 3.3, "wave_components": 200}
@@ -87,6 +90,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="excitation ramp [s] (default: the case's, else 2 wave periods with "
                         "regular/JONSWAP waves, 0 otherwise)")
     o.add_mooring(p)
+    o.add_rotor(p)
     p.add_argument("--no-wave-kinematics", dest="wave_kinematics", action="store_false",
                    default=True,
                    help="with --case: Morison drag on the body velocity alone, without the "
@@ -152,7 +156,8 @@ def _check_sources(args: argparse.Namespace) -> None:
     if args.coeffs and args.panels is not None:
         raise InputError("give --coeffs or --panels, not both")
     for name, given in (("--quick", args.quick), ("--mooring", args.mooring is not None),
-                        ("--no-wave-kinematics", not args.wave_kinematics)):
+                        ("--no-wave-kinematics", not args.wave_kinematics),
+                        ("--rotor/--wind-*/--slow-drift", bool(o.case_overrides(args)))):
         if given:
             raise InputError(f"{name} needs --case")
 
@@ -206,7 +211,8 @@ def _run_case(args: argparse.Namespace) -> xr.Dataset:
     case = load_case(args.case)
     defaults = _case_defaults(case)
     model = CaseModel.build(case, dofs=args.dofs, coeffs=args.coeffs, mooring=args.mooring,
-                            quick=args.quick, progress=not args.quiet)
+                            quick=args.quick, progress=not args.quiet,
+                            overrides=o.case_overrides(args))
     wave = _wave(args, model.coeffs, defaults)
     duration, dt, ramp = _timing(args, wave, defaults)
     o.check_steps(duration, dt, len(model.dofs))

@@ -36,6 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                   "DOFs, force components and [sweep] defaults; default: the paper sphere in "
                   "heave")
     o.add_mooring(p)
+    o.add_rotor(p)
     p.add_argument("--hs", required=True, type=o.positive_floats, metavar="HS[,HS...]",
                    help="significant wave heights [m], comma-separated")
     p.add_argument("--tp", required=True, type=o.positive_floats, metavar="TP[,TP...]",
@@ -96,12 +97,13 @@ def check_coefficients(coeffs, *, mass_given: bool) -> None:
 def config_from(args: argparse.Namespace):
     """The :class:`~hybridwsi.sweep.SweepConfig` of the options: a case's ``[sweep]`` defaults
     (``--case``) or the sphere's, overridden by the options given."""
+    from hybridwsi.commands._options import case_overrides
     from hybridwsi.sweep import SweepConfig
 
     given = {"duration": args.duration, "dt": args.dt, "ramp": args.ramp, "dofs": args.dofs,
              "gamma": args.jonswap_gamma, "wave_components": args.wave_components,
              "wave_kinematics": args.wave_kinematics, "coeffs": args.coeffs, "mass": args.mass,
-             "mooring": args.mooring,
+             "mooring": args.mooring, "overrides": case_overrides(args) or None,
              "nonlinear_hydrostatics": args.nonlinear_hydrostatics or None}
     if args.case is not None:
         cfg = SweepConfig.for_case(args.case, **given)
