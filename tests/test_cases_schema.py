@@ -262,7 +262,8 @@ def test_forces_table_is_resolved_and_mooring_model_overridden():
     oc3, sphere = load_case("oc3_hywind"), load_case("paper_sphere")
     assert oc3["forces"] == {"hydrostatics": "linear", "radiation": "statespace",
                              "excitation": True, "mooring": "table", "morison": True,
-                             "rotor": True, "linear_damping": True, "external_force": False}
+                             "rotor": True, "linear_damping": True, "external_force": False,
+                             "drift": False}
     assert sphere["forces"]["mooring"] == "none" and not sphere["forces"]["morison"]
     assert mooring_model(oc3) == "table"
     assert mooring_model(oc3, "quasi-static") == "quasi-static"

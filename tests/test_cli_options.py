@@ -79,6 +79,21 @@ def test_case_mooring_and_eta_options_are_one_definition(parsers):
             "wave-elevation column"), name
 
 
+def test_rotor_and_wind_options_are_one_definition(parsers):
+    """--rotor, --wind-speed, --turbulence-intensity, --wind-seed, --slow-drift (issue 29):
+    the same action in simulate and sweep, the rotor states those of forces/rotor.py."""
+    from hybridwsi.forces.rotor import STATES
+
+    assert o.ROTOR_STATES == STATES
+    opts = ("--rotor", "--wind-speed", "--turbulence-intensity", "--wind-seed", "--slow-drift")
+    for opt in opts:
+        sim, swp = (parsers[n]._option_string_actions[opt] for n in ("simulate", "sweep"))
+        assert (sim.type, sim.choices, sim.help) == (swp.type, swp.choices, swp.help), opt
+    args = parsers["sweep"].parse_args(["--hs", "4", "--tp", "10", "--out", "x",
+                                        "--no-slow-drift", "--wind-speed", "11.4"])
+    assert (args.slow_drift, args.wind_speed) == (False, 11.4)
+
+
 def test_quiet_everywhere(parsers):
     for name, p in parsers.items():
         assert "--quiet" in p._option_string_actions, name
