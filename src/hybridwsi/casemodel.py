@@ -73,6 +73,7 @@ from hybridwsi.forces import (
     rotor_from_case,
 )
 from hybridwsi.forces.drift import SlowDriftForce
+from hybridwsi.forces.lagged import LaggedComponent
 from hybridwsi.forces.mooring import LineTensions, MooringTable, QuasiStaticMooring
 from hybridwsi.history import TextTable, quantity_of, units_attrs
 from hybridwsi.hydro import bem
@@ -573,8 +574,8 @@ class CaseModel:
         every component that has one (the rotor's thrust and torque at the mean wind, the slow
         drift's realisation mean), ``C`` the coefficients' hydrostatic stiffness (linear, also
         for a run with nonlinear hydrostatics), ``F_moor`` the mooring's static force: the
-        ``table`` or ``quasi-static`` component itself, MoorPy solved at ``q`` for MoorDyn
-        (whose statics agree with MoorPy's within 1 %: docs/OC3_HYWIND.md). Zero when no
+        ``table`` or ``quasi-static`` component itself, MoorPy's tabulated interpolant for
+        MoorDyn (whose statics agree with MoorPy's within 1 %: docs/OC3_HYWIND.md). Zero when no
         component has a mean force, so a parked run starts at rest as before.
 
         Raises
@@ -590,8 +591,8 @@ class CaseModel:
             return np.zeros(n)
         stiffness = cf.matrix(self.coeffs, "hydrostatic_stiffness", self.dofs)
         mooring = components.get("mooring")
-        if self.mooring == "moordyn":
-            mooring = QuasiStaticMooring.from_case(self.case, self.dofs)
+        if self.mooring == "moordyn":  # MoorPy's smooth interpolant (its solve is noisy)
+            mooring = MooringForce.from_case(self.case, self.dofs)
         still, empty = np.zeros(n), np.zeros(0)
 
         def residual(q: np.ndarray) -> np.ndarray:
@@ -624,7 +625,7 @@ class CaseModel:
                  ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False,
                  extra: Mapping[str, KnownComponent] | None = None,
                  radiation: str | None = None, hydrostatics: str | None = None,
-                 from_offset: bool = True) -> xr.Dataset:
+                 from_offset: bool = True, lagged: Sequence[str] = ()) -> xr.Dataset:
         """One Cummins run of the case → TimeHistory with every component recorded.
 
         Parameters
@@ -651,6 +652,10 @@ class CaseModel:
             Start from the static equilibrium under the mean forces (:meth:`mean_offset`: the
             operating rotor's thrust, the slow drift's mean), so the run does not begin with a
             surge transient of the slow mode (~125 s period on OC3); False: from rest.
+        lagged : sequence of str
+            Components (by name) coupled one step lagged, their force held over each step
+            from its start (:class:`~hybridwsi.forces.lagged.LaggedComponent`; MoorDyn is
+            coupled so already): what a loosely coupled code or a lagged network does.
 
         Returns
         -------
@@ -668,6 +673,11 @@ class CaseModel:
                 raise InputError(f"{self.case.label} has its own {name} component; give it "
                                  "once")
             comps[name] = comp
+        for name in lagged:
+            if name not in comps:
+                raise InputError(f"no component {name!r} to lag (have {', '.join(comps)})")
+            if not comps[name].stepped:
+                comps[name] = LaggedComponent(comps[name])
         n = len(self.dofs)
         offset = self.mean_offset(comps) if from_offset else np.zeros(n)
         z0 = offset + np.broadcast_to(np.asarray(z0, dtype=float), (n,))

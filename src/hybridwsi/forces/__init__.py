@@ -15,6 +15,7 @@ from hybridwsi.forces.base import (
 from hybridwsi.forces.drift import SlowDriftForce
 from hybridwsi.forces.external import ConstantForce, PrescribedForce
 from hybridwsi.forces.hydrostatics import ExactHydrostatic
+from hybridwsi.forces.lagged import LaggedComponent
 from hybridwsi.forces.linear import (
     REGISTRY,
     AddedMass,
@@ -47,5 +48,5 @@ __all__ = [
     "MooringTable",
     "MorisonDrag", "Strips", "additional_damping", "profile_strips", "ParkedRotor", "RotorThrust",
     "OperatingRotor", "PIControlledRotor", "RotorTable", "rotor_from_case", "MemberMorison",
-    "SlowDriftForce",
+    "SlowDriftForce", "LaggedComponent",
 ]
