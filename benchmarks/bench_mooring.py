@@ -27,6 +27,12 @@ inside the timing), the baseline is the same run with the tabulated quasi-static
 MoorDyn-coupled wall time per simulated hour against real time (3600 s) and the median ratio to
 the baseline with its spread. ``--duration`` [s] simulated per sample (default 600; 3600 for a
 literal hour).
+
+``--design``: the same comparison on the case's design-fidelity runs (issue 29):
+``CaseModel.simulate`` of OC3-Hywind in 6 DOFs with every component of the case — Morison drag
+on the wave kinematics, additional damping, the operating NREL 5-MW rotor at rated (11.4 m/s,
+turbulence intensity 0.1, Kaimal), Newman's slow drift — in a JONSWAP sea (Hs 6 m, Tp 12 s,
+200 components), starting from the mean offset; MoorDyn against the tabulated mooring.
 """
 
 from __future__ import annotations
@@ -62,6 +68,37 @@ def _timed(run, min_time: float = 0.2) -> tuple[float, object]:
             return wall / n, out
 
 
+def _compare(run_base, run_md, duration: float, repeat: int, what: str) -> None:
+    """Alternate the baseline (repeated to ≥ 0.2 s) and the MoorDyn-coupled run ``repeat``
+    times; print wall and CPU time per simulated hour, real-time factor and median ratio."""
+    ratios, walls, base, cpu = [], [], [], []
+    for _ in range(repeat):
+        t_base, h_base = _timed(run_base)
+        t0, c0 = time.perf_counter(), time.process_time()
+        h_md = run_md()
+        t_md = time.perf_counter() - t0
+        cpu.append(time.process_time() - c0)
+        ratios.append(t_md / t_base)
+        walls.append(t_md)
+        base.append(t_base)
+    hour = 3600.0 / duration * np.median(walls)
+    print(f"{duration:.0f} s simulated per sample, 6 DOF, {repeat} alternating samples; {what}")
+    print(f"MoorDyn-coupled   : median {np.median(walls):7.2f} s wall (min {min(walls):.2f}, max "
+          f"{max(walls):.2f}) -> {hour:6.0f} s per simulated hour = {3600.0 / hour:5.1f}x "
+          f"faster than real time")
+    print(f"  its CPU time    : median {np.median(cpu):7.2f} s -> "
+          f"{3600.0 / duration * np.median(cpu):6.0f} s CPU per simulated hour (the wall time "
+          f"on a machine shared with other jobs is longer)")
+    print(f"tabulated baseline: median {np.median(base):7.3f} s wall (min {min(base):.3f}, max "
+          f"{max(base):.3f}) -> {3600.0 / duration * np.median(base):6.1f} s per hour")
+    print(f"ratio MoorDyn / table: median {np.median(ratios):.0f}x (min {min(ratios):.0f}, max "
+          f"{max(ratios):.0f})")
+    z_md, z_tab = h_md["z"].values, h_base["z"].values
+    print("std surge/heave/pitch MoorDyn: "
+          + ", ".join(f"{z_md[:, i].std():.4g}" for i in (0, 2, 4))
+          + "; table: " + ", ".join(f"{z_tab[:, i].std():.4g}" for i in (0, 2, 4)))
+
+
 def moordyn_cost(duration: float, repeat: int) -> None:
     """MoorDyn-coupled run against the tabulated-mooring baseline (module doc, ``--moordyn``)."""
     from hybridwsi.cummins import build_system, simulate
@@ -81,33 +118,33 @@ def moordyn_cost(duration: float, repeat: int) -> None:
     kw = dict(dofs=dofs, duration=duration, dt=dt, wave=wave, ramp=60.0,
               radiation_ss=build_system(coeffs, dofs=dofs, dt=dt).ss)
     simulate(coeffs, forces=[table, damping], **dict(kw, duration=10 * dt))  # Numba warm-up
-    ratios, walls, base, cpu = [], [], [], []
-    for _ in range(repeat):
-        t_base, h_base = _timed(lambda: simulate(coeffs, forces=[table, damping], **kw))
-        t0, c0 = time.perf_counter(), time.process_time()
-        h_md = simulate(coeffs, forces=[moordyn, damping], **kw)
-        t_md = time.perf_counter() - t0
-        cpu.append(time.process_time() - c0)
-        ratios.append(t_md / t_base)
-        walls.append(t_md)
-        base.append(t_base)
-    hour = 3600.0 / duration * np.median(walls)
-    print(f"{duration:.0f} s simulated per sample, 6 DOF, dt {dt} s, {repeat} alternating samples; "
-          f"{moordyn.describe()}")
-    print(f"MoorDyn-coupled   : median {np.median(walls):7.2f} s wall (min {min(walls):.2f}, max "
-          f"{max(walls):.2f}) -> {hour:6.0f} s per simulated hour = {3600.0 / hour:5.1f}x "
-          f"faster than real time")
-    print(f"  its CPU time    : median {np.median(cpu):7.2f} s -> "
-          f"{3600.0 / duration * np.median(cpu):6.0f} s CPU per simulated hour (the wall time "
-          f"on a machine shared with other jobs is longer)")
-    print(f"tabulated baseline: median {np.median(base):7.3f} s wall (min {min(base):.3f}, max "
-          f"{max(base):.3f}) -> {3600.0 / duration * np.median(base):6.1f} s per hour")
-    print(f"ratio MoorDyn / table: median {np.median(ratios):.0f}x (min {min(ratios):.0f}, max "
-          f"{max(ratios):.0f})")
-    z_md, z_tab = h_md["z"].values, h_base["z"].values
-    print("std surge/heave/pitch MoorDyn: "
-          + ", ".join(f"{z_md[:, i].std():.4g}" for i in (0, 2, 4))
-          + "; table: " + ", ".join(f"{z_tab[:, i].std():.4g}" for i in (0, 2, 4)))
+    _compare(lambda: simulate(coeffs, forces=[table, damping], **kw),
+             lambda: simulate(coeffs, forces=[moordyn, damping], **kw), duration, repeat,
+             f"dt {dt} s; {moordyn.describe()}")
+
+
+#: the design-fidelity set-up of ``--design`` (issue 29 item 5's reference): the operating
+#: rotor in turbulent wind at rated, the slow drift, Morison drag on the wave kinematics
+DESIGN = {"rotor": {"state": "operating", "wind_speed": 11.4, "turbulence_intensity": 0.1,
+                    "wind_seed": 3},
+          "forces": {"drift": True}}
+
+
+def design_cost(duration: float, repeat: int) -> None:
+    """``--design``: the case's own runs (``CaseModel.simulate``, every component, the mean
+    offset start) with MoorDyn against the same with the tabulated mooring."""
+    from hybridwsi.casemodel import CaseModel
+    from hybridwsi.waves import JONSWAP
+
+    dofs, dt = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw"), 0.1
+    wave = JONSWAP(hs=6.0, tp=12.0, gamma=3.3, seed=7, n_components=200)
+    models = {m: CaseModel.build("oc3_hywind", dofs=dofs, dt=dt, mooring=m, overrides=DESIGN)
+              for m in ("table", "moordyn")}
+    kw = dict(duration=duration, dt=dt, wave=wave, ramp=60.0)
+    models["table"].simulate(**dict(kw, duration=10 * dt))  # Numba warm-up
+    comps = models["moordyn"].components(sea=wave)
+    _compare(lambda: models["table"].simulate(**kw), lambda: models["moordyn"].simulate(**kw),
+             duration, repeat, f"dt {dt} s; components {', '.join(comps)}; {DESIGN}")
 
 
 def main() -> None:
@@ -117,11 +154,14 @@ def main() -> None:
     parser.add_argument("--batch", type=int, default=32, help="states per batch call")
     parser.add_argument("--moordyn", action="store_true",
                         help="time the MoorDyn-coupled loop against the tabulated mooring")
+    parser.add_argument("--design", action="store_true",
+                        help="the MoorDyn-coupled design-fidelity case run (rotor, drift, "
+                             "drag) against the same with the tabulated mooring")
     parser.add_argument("--duration", type=float, default=600.0,
-                        help="--moordyn: simulated time per sample [s]")
+                        help="--moordyn/--design: simulated time per sample [s]")
     args = parser.parse_args()
-    if args.moordyn:
-        moordyn_cost(args.duration, max(args.repeat, 5))
+    if args.moordyn or args.design:
+        (design_cost if args.design else moordyn_cost)(args.duration, max(args.repeat, 5))
         return
 
     case = load_case("oc3_hywind")
