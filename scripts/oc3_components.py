@@ -71,7 +71,11 @@ def main(argv: list[str] | None = None) -> int:
           f"{DT} s, largest stable Δt {coupling['max_stable_dt']:.3g} s "
           f"({time.time() - t0:.0f} s so far)\n")
     limit = coupling["max_stable_dt"]
-    trials = {"rotor": [DT], "drift": [DT], "mooring": [DT]}
+    alone = fc.ode_limit(model, hist, comps)
+    out["predicted"]["ode_alone_max_stable_dt"] = alone
+    print(f"the ODE without the mooring's dynamics (RK4, known part only): largest stable Δt "
+          f"{alone:.3g} s\n")
+    trials = {"rotor": [DT], "drift": [DT], "mooring": [DT, 1.0]}
     if np.isfinite(limit) and limit < 6.0:  # beyond: the ODE's own RK4 limit (yaw, 0.76 rad/s)
         trials["mooring"] += [round(0.8 * limit, 3), round(1.25 * limit, 3)]
     print("| component | Δt [s] | in the ODE: stable (decay ratios) | lagged: stable "

@@ -215,6 +215,16 @@ def predict_coupling(model: CaseModel, hist: xr.Dataset,
             "added_mass_ratio": rep.added_mass_ratio}
 
 
+def ode_limit(model: CaseModel, hist: xr.Dataset, components: Mapping[str, KnownComponent]
+              ) -> float:
+    """Largest stable RK4 Δt [s] of the linear ODE alone (known part of the mooring's step
+    with its quasi-static stiffness, nothing lagged; no radiation memory): what limits Δt
+    before any coupling does."""
+    mass = np.asarray(hist["mass"].values, dtype=float)
+    known = known_part(model, hist, components, "none")
+    return hold_rk4_limit(stability.CoupledStep.from_components(mass, known, None, dt=0.1))
+
+
 def _decay_ratio(hist: xr.Dataset, dof: str, offset: float) -> float:
     """RMS of ``z − offset`` of ``dof`` over the last third over that of the first third."""
     y = hist["z"].sel(dof=dof).values - offset
