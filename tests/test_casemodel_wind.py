@@ -91,3 +91,16 @@ def test_simulate_options_need_a_case_and_agree(tmp_path, capsys):
                  "--out", out, "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "not with --rotor thrust" in err
+
+
+def test_sweep_settings_carry_the_overrides():
+    """A sweep with a wind is another set-up: its settings (and so its resume hash) differ
+    from the parked one's by the overrides and the changed case's content hash."""
+    from hybridwsi.sweep import SweepConfig, settings
+
+    wind = {"rotor": {"state": "operating", "wind_speed": 11.4}, "forces": {"rotor": True}}
+    parked = settings(SweepConfig.for_case("oc3_hywind"))
+    operating = settings(SweepConfig.for_case("oc3_hywind", overrides=wind))
+    assert "overrides" not in parked and operating["overrides"] == wind
+    assert operating["case_sha256"] != parked["case_sha256"]
+    assert any("11.4" in f for f in operating["forces"])
