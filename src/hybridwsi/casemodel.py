@@ -620,6 +620,23 @@ class CaseModel:
                 "mooring_table": None if self.mooring_table is None
                 else self.mooring_table.dataset.attrs.get("input_hash")}
 
+    def _with(self, comps: dict[str, KnownComponent], extra: Mapping[str, KnownComponent],
+              lagged: Sequence[str]) -> dict[str, KnownComponent]:
+        """``comps`` plus ``extra`` (a name given twice is refused), the ``lagged`` ones
+        wrapped in :class:`~hybridwsi.forces.lagged.LaggedComponent` (a stepped component,
+        MoorDyn, is lagged by its own coupling already)."""
+        for name, comp in extra.items():
+            if name in comps:
+                raise InputError(f"{self.case.label} has its own {name} component; give it "
+                                 "once")
+            comps[name] = comp
+        for name in lagged:
+            if name not in comps:
+                raise InputError(f"no component {name!r} to lag (have {', '.join(comps)})")
+            if not comps[name].stepped:
+                comps[name] = LaggedComponent(comps[name])
+        return comps
+
     def simulate(self, *, duration: float, dt: float, wave: Wave | None = None,
                  z0: float | Sequence[float] = 0.0, zdot0: float | Sequence[float] = 0.0,
                  ramp: float = 0.0, wave_kinematics: bool = True, progress: bool = False,
@@ -668,16 +685,7 @@ class CaseModel:
                   **({"hydrostatics": hydrostatics} if hydrostatics else {})}
         comps = self.components(wave=wave if wave_kinematics else None, ramp=ramp, dt=dt,
                                 sea=wave)
-        for name, comp in (extra or {}).items():
-            if name in comps:
-                raise InputError(f"{self.case.label} has its own {name} component; give it "
-                                 "once")
-            comps[name] = comp
-        for name in lagged:
-            if name not in comps:
-                raise InputError(f"no component {name!r} to lag (have {', '.join(comps)})")
-            if not comps[name].stepped:
-                comps[name] = LaggedComponent(comps[name])
+        comps = self._with(comps, extra or {}, lagged)
         n = len(self.dofs)
         offset = self.mean_offset(comps) if from_offset else np.zeros(n)
         z0 = offset + np.broadcast_to(np.asarray(z0, dtype=float), (n,))
