@@ -533,7 +533,7 @@ class CaseModel:
         overrides : mapping, optional
             Entries of the case's tables replaced (:func:`hybridwsi.cases.with_values`; the
             command line's ``--rotor``, ``--wind-speed``, ``--slow-drift``, ...:
-            :func:`run_overrides`).
+            :func:`hybridwsi.commands._options.case_overrides`).
         """
         case = with_values(load_case(case), overrides or {})
         coeffs = case_coefficients(case, coeffs=coeffs, quick=quick, cache_dir=cache_dir,
