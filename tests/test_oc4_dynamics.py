@@ -212,3 +212,22 @@ def test_raos_time_domain_against_frequency_domain(system):
                 where = (p["heading_deg"], p["period"], d)
                 assert p["relative_error_ss"][d] < 0.01, where
                 assert p["relative_error"][d] < bound[d], where
+
+
+def test_raos_six_dofs_three_headings_in_seconds(system):
+    """The fast companion of the slow RAO table: one period (12 s, the sea states' peak) at
+    0°, 30°, 60°, all six DOFs moved by the wave: the Cummins run's
+    steady-state amplitude equals the frequency domain of the same linear system within 1 %
+    (the closed-form steady state of that system: the time integration, the excitation at
+    the heading and the coupling are right); at 30° sway, roll and yaw move."""
+    points = semi_raos(system, [12.0], [0.0, 30.0, 60.0], quick=True)
+    for p in points:
+        fd = p["frequency_domain"]
+        scale = {"m": max(fd[d] for d in ("Surge", "Sway", "Heave")),
+                 "rad": max(fd[d] for d in ("Roll", "Pitch", "Yaw"))}
+        for d in RIGID_DOFS:
+            unit = "m" if d in ("Surge", "Sway", "Heave") else "rad"
+            if fd[d] > 1e-3 * scale[unit]:
+                assert p["relative_error_ss"][d] < 0.01, (p["heading_deg"], p["period"], d)
+        if p["heading_deg"] == 30.0:
+            assert min(fd["Sway"], fd["Roll"], fd["Yaw"]) > 1e-4
