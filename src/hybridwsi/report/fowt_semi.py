@@ -160,3 +160,141 @@ def semi_rao_curves(system: SemiSystem, omegas: np.ndarray, headings_deg: Sequen
     """|X(ω)|/a (n_heading, n_ω, 6) of the frequency-domain model."""
     return np.array([rao_curve(system.coeffs, system.mooring, system.drag, omegas,
                                system.dofs, direction=math.radians(b)) for b in headings_deg])
+
+
+#: what each partition of :func:`semi_diagnostic` leaves to the network
+SEMI_RESIDUAL = {
+    "1": "everything (inertia, hydrostatics, mooring, radiation, drag, excitation)",
+    "2": "A∞, radiation memory, drag, mooring nonlinearity, excitation",
+    "3": "radiation memory, drag, mooring nonlinearity, excitation",
+    "A_inf_to_network": "A∞ (6×6), drag, mooring nonlinearity",
+    "A_inf_coupling_to_network": "A∞ off-diagonal couplings, drag, mooring nonlinearity",
+    "recommended": "member drag + (tabulated mooring − K q)",
+}
+
+
+def semi_sea_history(system: SemiSystem, case: Mapping[str, Any] | None = None, *,
+                     hs: float = 4.0, tp: float = 11.0, heading_deg: float = 30.0,
+                     seed: int = 1, n_components: int = 100, duration: float = 600.0,
+                     dt: float = 0.2, ramp: float = 20.0) -> xr.Dataset:
+    """A nonlinear six-DOF Cummins run in a long-crested JONSWAP sea at ``heading_deg`` [deg]:
+    the radiation state space, MoorPy's tabulated mooring (F(q) − F0) and every member's
+    Morison drag on the relative velocity with the Airy kinematics (``F_ext`` their sum)."""
+    from hybridwsi.cummins import simulate
+    from hybridwsi.forces import MooringForce
+    from hybridwsi.waves import JONSWAP
+
+    case = load_case("oc4_semi") if case is None else case
+    wave = JONSWAP(hs=hs, tp=tp, seed=seed, n_components=n_components,
+                   direction=math.radians(heading_deg))
+    dofs = list(system.dofs)
+    drag = MemberMorison.from_case(case, dofs, wave=wave, ramp=ramp, inertia=False)
+    return simulate(system.coeffs, dofs=dofs, duration=duration, dt=dt, wave=wave, ramp=ramp,
+                    forces=[MooringForce.from_case(case, dofs), drag],
+                    radiation_ss=system.radiation_ss)
+
+
+def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
+                    accuracies: Sequence[float] = (1e-4, 1e-2), perturbation: float = 1e-3
+                    ) -> dict[str, Any]:
+    """The 6×6 diagnostic of every partition on a six-DOF history (JSON-ready): α, β, γ,
+    identifiability per DOF and per coupling (every pair i < j: entries (i, j), (j, i) of α
+    and γ move by 10 % only under a force error above the stated accuracy, and both DOFs
+    identifiable, i.e. also the random error small), the lagged
+    verdict (spectral radius of the Newmark lagged step at the history's Δt) and, for the
+    linear known parts 1–3, the observed lagged run of the regressed surrogate
+    (:mod:`hybridwsi.report.fowt_diagnostic`, the OC3 analysis in six DOFs)."""
+    from hybridwsi.report import fowt_diagnostic as fd
+
+    dofs = [str(d) for d in hist["dof"].values]
+    dt = float(hist["time"].values[1] - hist["time"].values[0])
+    parts = fd.partitions(hist, Hydrostatic(system.mooring), LinearDamping(np.zeros((6, 6))))
+    rows = []
+    for name, known in parts.items():
+        entry = fd.partition_entry(name, hist, known, accuracies, dt=dt,
+                                   perturbation=perturbation)
+        entry["left_to_network"] = SEMI_RESIDUAL[name]
+        regs = [_quiet_regress(hist, known, acc) for acc in accuracies]
+        entry["couplings_identifiable"] = {
+            f"{acc:g}": [f"{dofs[i]}-{dofs[j]}" for i in range(6) for j in range(i + 1, 6)
+                         if fd.coupling_identifiable(r, acc, i, j)
+                         and r.identifiable_dof[i] and r.identifiable_dof[j]]
+            for acc, r in zip(accuracies, regs)}
+        entry["where"], entry["reason"] = fd.verdict_line(entry)
+        rows.append(entry)
+    mass = fd.rigid_mass(hist)
+    a_inf = np.asarray(hist["added_mass_inf"].values)
+    return {"history": {"duration_s": float(hist["time"].values[-1]), "dt": dt, "dofs": dofs,
+                        "wave": hist.attrs.get("wave")},
+            "std_z": dict(zip(dofs, np.asarray(hist["z"].values).std(axis=0).tolist())),
+            "mass": mass.tolist(), "added_mass_inf": a_inf.tolist(),
+            "rho_M_inv_A_inf": fd.stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
+            "partitions": rows}
+
+
+def _quiet_regress(hist: xr.Dataset, known: Sequence[KnownComponent], accuracy: float) -> Any:
+    import warnings
+
+    from hybridwsi.diagnostic.regression import regress
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return regress(hist, "F_tot", list(known), force_accuracy=accuracy)
+
+
+def semi_mode_variants(system: SemiSystem) -> dict[str, float]:
+    """Surge and pitch frequencies [Hz] of the variants behind the natural-frequency table of
+    docs/OC4_SEMI.md: the coupled surge–pitch pair with A(ω) at the mode's own frequency or
+    with A∞, and pitch alone (surge held) with either; rigid mass, C_hs + K_moor."""
+    import scipy.linalg
+
+    from hybridwsi.hydro import coefficients as co
+
+    c = system.coeffs
+    m = co.matrix(c, "mass")
+    k = co.matrix(c, "hydrostatic_stiffness") + system.mooring
+
+    def freqs(a: np.ndarray, idx: list[int]) -> np.ndarray:
+        w2 = scipy.linalg.eigh(k[np.ix_(idx, idx)], (m + a)[np.ix_(idx, idx)], eigvals_only=True)
+        return np.sqrt(w2) / (2 * math.pi)
+
+    def own(idx: list[int], which: int, f: float) -> float:  # A at the mode's own frequency
+        for _ in range(50):
+            f = float(freqs(co.at_frequency(c, "added_mass", 2 * math.pi * f), idx)[which])
+        return f
+
+    a_inf = co.matrix(c, "added_mass_inf")
+    return {"surge_coupled": own([0, 4], 0, 0.009), "pitch_coupled": own([0, 4], 1, 0.04),
+            "surge_coupled_A_inf": float(freqs(a_inf, [0, 4])[0]),
+            "pitch_coupled_A_inf": float(freqs(a_inf, [0, 4])[1]),
+            "pitch_alone": own([4], 0, 0.04), "pitch_alone_A_inf": float(freqs(a_inf, [4])[0])}
+
+
+def mooring_amplitude_ratio(case: Mapping[str, Any], dof: str, amplitudes: Sequence[float]
+                            ) -> list[float]:
+    """Frequency of an undamped one-DOF oscillator on MoorPy's nonlinear mooring force along
+    ``dof`` at each amplitude [m or rad], over its small-amplitude frequency (same mass): the
+    period is ∮ dx / v with ½ m v² = V(X) − V(x), taken on each side of rest (the catenaries
+    are not symmetric in surge)."""
+    import scipy.integrate
+    from scipy.interpolate import CubicSpline
+
+    system = MooringSystem.from_case(case)
+    i = RIGID_DOFS.index(dof)
+    top = 1.2 * max(amplitudes)
+    x = np.linspace(-top, top, 97)
+    f0 = system.force6(np.zeros(6))[i]
+    restoring = CubicSpline(x, [f0 - system.force6(np.eye(6)[i] * v)[i] for v in x])
+    energy = restoring.antiderivative()
+    k0 = float(restoring.derivative()(0.0))
+    out = []
+    for amp in amplitudes:
+        half = 0.0
+        for side in (1.0, -1.0):
+            e_max = energy(side * amp)
+            half += scipy.integrate.quad(  # x = X sin u removes the turning-point singularity
+                lambda u: amp * math.cos(u) / math.sqrt(
+                    max(2 * (e_max - energy(side * amp * math.sin(u))), 1e-300)),
+                0, math.pi / 2, limit=200)[0]
+        out.append(float(2 * math.pi / math.sqrt(k0) / (2 * half)))
+    return out
