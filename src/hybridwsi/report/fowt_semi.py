@@ -308,25 +308,12 @@ SEMI_RAO_HEADINGS = (0.0, 30.0, 60.0)
 
 def semi_decay_figure(decays: Mapping[str, Mapping[str, Any]]) -> tuple[Any, xr.Dataset]:
     """The six free decays, each in its released DOF [m or rad] against time [s]."""
-    import matplotlib.pyplot as plt
+    from hybridwsi.report.fowt import decay_figure
 
-    from hybridwsi.dofs import motion_unit
-
-    fig, axes = plt.subplots(3, 2, figsize=(9, 7))
-    data = {}
-    for ax, (dof, d) in zip(axes.T.ravel(), decays.items()):
-        hist = d["history"]
-        t, z = hist["time"].values, hist["z"].sel(dof=dof).values
-        ax.plot(t, z, lw=1)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel(f"{dof} [{motion_unit(dof)}]")
-        ax.set_title(f"{dof}: {d['hz']:.5f} Hz (zero crossings)", fontsize=9)
-        ax.grid(alpha=0.3)
-        data[dof] = xr.DataArray(z, coords={f"time_{dof}": t}, dims=(f"time_{dof}",),
-                                 attrs={"units": motion_unit(dof)})
-    fig.tight_layout()
-    return fig, xr.Dataset(data, attrs={"title": "OC4-DeepCwind semi free decays (6-DOF linear "
-                                                 "Cummins, linearised member drag)"})
+    return decay_figure({d: v["history"] for d, v in decays.items()},
+                        {d: f"{d}: {v['hz']:.5f} Hz (zero crossings)" for d, v in decays.items()},
+                        columns=2, title="OC4-DeepCwind semi free decays (6-DOF linear Cummins, "
+                                         "linearised member drag)")
 
 
 def semi_rao_figure(points: Sequence[Mapping[str, Any]], omegas: np.ndarray,
