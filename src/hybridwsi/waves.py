@@ -64,6 +64,7 @@ import scipy.optimize
 import scipy.special
 import xarray as xr
 
+from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
 
 G = 9.81
@@ -872,7 +873,7 @@ def excitation_transfer(coeffs: xr.Dataset, dofs: list[str], directions: Any
             if "wave_direction" in fe.dims else np.zeros(1))
     # the full six-vector (missing DOFs 0) so the symmetry maps can mix the DOFs
     six = np.zeros(vals.shape[:2] + (6,), dtype=complex)
-    rigid = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
+    rigid = tuple(RIGID_DOFS)
     for j, name in enumerate(have):
         if name in rigid:
             six[:, :, rigid.index(name)] = vals[:, :, j]
