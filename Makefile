@@ -1,12 +1,14 @@
 # hybridwsi: two entry points, both set up .venv from scratch when needed.
 #   make run   -> reproduce the paper into results/ (QUICK=1: coarse mesh, about a minute)
-#   make test  -> the default test suite (slow full-size runs excluded)
+#   make test  -> the default test suite (slow full-size runs excluded) on TEST_JOBS pytest-xdist
+#                 workers, printing the 15 slowest tests (tests/conftest.py: how it is shared)
 PY      ?= python3
 VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 EXTRAS  ?= all
 OUT     ?= results
+TEST_JOBS ?= 2
 export OPENBLAS_NUM_THREADS ?= 1
 export MPLBACKEND ?= Agg
 
@@ -23,11 +25,14 @@ install: $(STAMP)
 run: $(STAMP)
 	$(BIN)/hybridwsi reproduce --out $(OUT) $(if $(QUICK),--quick,)
 
+# --dist loadscope: a test module (tests/conftest.py: or the modules of the shared reproduce
+# run) is one unit of work, its fixtures built once; --no-loadscope-reorder: heaviest first
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS) --dist loadscope --no-loadscope-reorder \
+	    --durations=15
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -m slow --durations=15
 
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done

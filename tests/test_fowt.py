@@ -25,10 +25,10 @@ CASE = load_case("oc3_hywind")
 
 
 @pytest.fixture(scope="module")
-def section(tmp_path_factory) -> tuple[Path, str]:
-    out = tmp_path_factory.mktemp("report")
-    md = fowt.run_fowt(out, quick=True, progress=False, hybrid=False)  # hybrid: test_fowt_hybrid
-    return out / "fowt", md
+def section(quick_results) -> tuple[Path, str]:
+    """``run_fowt(quick=True)`` as ``reproduce --quick`` runs it (the session's shared run,
+    tests/conftest.py): its folder and the report that holds its Markdown section."""
+    return quick_results / "fowt", (quick_results / "report.md").read_text()
 
 
 def _json(folder: Path, name: str):

@@ -145,13 +145,13 @@ def test_json_safe_writes_strict_json():
     assert out == {"a": None, "b": [1.5, True], "3": 2}
 
 
-@pytest.mark.slow
-def test_run_fowt_quick_writes_items_7_and_8(tmp_path):
-    """The report section (quick, through ``run_fowt``): verdicts agree with every rollout, the
+def test_run_fowt_quick_writes_items_7_and_8(quick_results):
+    """The report section (quick, through ``run_fowt`` as ``reproduce --quick`` runs it: the
+    session's shared run, tests/conftest.py): verdicts agree with every rollout, the
     A∞ partition is predicted unstable and is, the recommended one tracks the held-out seas
     and runs the long sea stably."""
-    md = fowt.run_fowt(tmp_path, quick=True)
-    folder = tmp_path / "fowt"
+    md = (quick_results / "report.md").read_text()
+    folder = quick_results / "fowt"
     hyb = json.loads((folder / "hybrid.json").read_text())
     diag = json.loads((folder / "diagnostic.json").read_text())
     assert (folder / "hybrid_rollout.png").is_file()

@@ -339,15 +339,12 @@ def test_decay_rate_of_an_exact_damped_oscillation(setup):
     assert kh.decay_rate(t, z, setup.te0) == pytest.approx(0.8, rel=1e-6)
 
 
-# --------------------------------------------------------------------------- full size
-@pytest.mark.slow
-def test_run_kramer_hybrid_writes_every_fold(tmp_path):
-    """The quick study end to end: one entry per held-out drop with the issue-32 fields, the
-    figure and its data, and the report section that calls the scores a development score."""
-    from hybridwsi.report.kramer_report import run_kramer_hybrid
-
-    md = run_kramer_hybrid(tmp_path, quick=True, progress=False)
-    data = json.loads((tmp_path / "kramer_hybrid.json").read_text())
+def test_run_kramer_hybrid_writes_every_fold(quick_results):
+    """The quick study end to end, as ``reproduce --quick`` runs it (the session's shared run,
+    tests/conftest.py): one entry per held-out drop with the issue-32 fields, the figure and its
+    data, and the report section that calls the scores a development score."""
+    md = (quick_results / "report.md").read_text()
+    data = json.loads((quick_results / "kramer_hybrid.json").read_text())
     assert set(data) == {"01D", "03D", "05D"}
     for drop, r in data.items():
         assert r["held_out"] is True and r["score_kind"] == "development"
@@ -361,7 +358,8 @@ def test_run_kramer_hybrid_writes_every_fold(tmp_path):
             assert isinstance(r[key], float) and 0 < r[key] < 1, key
         assert r["predicted_stable"] == r["observed_stable"]
         assert r["structured_predicted_stable"] == r["structured_observed_stable"]
-    assert (tmp_path / "kramer_hybrid.png").is_file() and (tmp_path / "kramer_hybrid.nc").is_file()
+    assert (quick_results / "kramer_hybrid.png").is_file()
+    assert (quick_results / "kramer_hybrid.nc").is_file()
     assert "development score" in md and "physics + lead" in md and "kramer_hybrid.png" in md
 
 

@@ -4,12 +4,16 @@ The quick run uses a coarse mesh (400 panels, 120 frequencies), so the bounds he
 than the paper-configuration check (``-m slow``). The truth is independent of our code: the
 paper's Table 1 values, Newton's law (F_tot = m z̈ → α = m), the hydrostatic stiffness ρgπR²,
 Hulme's A∞ = 0.5 ρ (2/3)πR³ and the blind-comparison scoring of the decay tests.
+
+One ``reproduce --quick`` run serves every test here (``quick_results``, tests/conftest.py);
+the kill and user-history tests share one more run (``rerun_after_kill``).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -20,13 +24,6 @@ from hybridwsi.cli import main
 RHO, G, R, M = 998.2, 9.81, 0.15, 7.06
 C_EXACT = RHO * G * math.pi * R**2
 A_INF_HULME = 0.5 * RHO * (2 / 3) * math.pi * R**3
-
-
-@pytest.fixture(scope="module")
-def quick_results(tmp_path_factory):
-    out = tmp_path_factory.mktemp("results")
-    assert main(["reproduce", "--quick", "--quiet", "--out", str(out)]) == 0
-    return out
 
 
 def test_writes_every_promised_file(quick_results):
@@ -128,13 +125,10 @@ def test_full_configuration_table1_within_one_percent_of_paper(tmp_path):
     assert max(abs(bem[k]["beta"]) for k in bem) <= 0.1
 
 
-def test_sph_column_from_a_user_history(quick_results, tmp_path):
+def test_sph_column_from_a_user_history(rerun_after_kill):
     """--sph-history regresses any history file like the BEM one: fed the BEM run itself, the
     SPH column must equal the BEM column, and case 1 must return α = m (Newton)."""
-    src = quick_results / "histories" / "bem_regular_waves.nc"
-    out = tmp_path / "res"
-    assert main(["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid",
-                 "--sph-history", str(src), "--out", str(out)]) == 0
+    out = rerun_after_kill["out"]
     t = json.loads((out / "table1.json").read_text())
     for case in ("1", "2", "3"):
         for key in ("alpha", "beta", "gamma"):
@@ -196,41 +190,62 @@ def test_short_floatinginfo_is_refused_before_any_bem_run(tmp_path, capsys, monk
     assert not out.exists() and not list(tmp_path.glob(".r.*"))
 
 
-def test_killed_run_leaves_the_previous_results_intact(tmp_path, monkeypatch):
-    """Killed after Table 1 (a later step raises): the old folder is untouched, so table1.md and
-    report.md still name the same SPH source; a complete re-run then replaces the whole set."""
+@pytest.fixture(scope="module")
+def rerun_after_kill(quick_results, tmp_path_factory):
+    """A results folder (a copy of the shared quick run, its SPH column from the shipped
+    history), a run with a FloatingInfo SPH history killed after its Table 1, then a complete
+    run with ``--sph-history`` = the quick run's own BEM history (``--no-decay --no-hybrid``).
+    What each stage saw is returned for the tests to check."""
     from hybridwsi.report import reproduce as rep
 
-    out = tmp_path / "res"
-    first = _floatinginfo(tmp_path / "first_run.csv", duration=2.0)
-    args = ["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid", "--out", str(out)]
-    assert main([*args, "--sph-history", str(first)]) == 0
-    before = _digests(out)
-    second = _floatinginfo(tmp_path / "second_run.csv", duration=2.5)
+    root = tmp_path_factory.mktemp("rerun")
+    out = shutil.copytree(quick_results, root / "res", symlinks=True)
+    seen = {"before": _digests(out)}
+    second = _floatinginfo(root / "second_run.csv", duration=2.5)
 
     def killed(*a, **k):
-        assert (tmp_path / ".res.partial" / "table1.md").is_file()  # Table 1 of the new run
+        partial = root / ".res.partial"
+        seen["partial_table1_md"] = (partial / "table1.md").read_text()  # the new run's
+        seen["partial_table1"] = json.loads((partial / "table1.json").read_text())
         raise KeyboardInterrupt
 
-    with monkeypatch.context() as mp:
-        mp.setattr(rep, "figure2", killed)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(rep, "figure2", killed)
+    try:
         with pytest.raises(KeyboardInterrupt):
-            rep.run(out, quick=True, progress=False, decay=False, hybrid=False,
-                    sph_path=second)
-    assert _digests(out) == before
-    for name in ("table1.md", "report.md"):
-        text = (out / name).read_text()
-        assert "first_run.csv" in text and "second_run.csv" not in text
-    assert not (tmp_path / ".res.partial").exists()
+            rep.run(out, quick=True, progress=False, decay=False, hybrid=False, sph_path=second)
+    finally:
+        mp.undo()
+    seen["after_kill"] = _digests(out)
+    seen["texts_after_kill"] = {n: (out / n).read_text() for n in ("table1.md", "report.md")}
+    seen["partial_left"] = (root / ".res.partial").exists()
 
-    # a valid FloatingInfo file gives a valid report: Newton in case 1 (F_tot = m z̈ → α = m)
-    assert main([*args, "--sph-history", str(second)]) == 0
+    user = quick_results / "histories" / "bem_regular_waves.nc"
+    assert main(["reproduce", "--quick", "--quiet", "--no-decay", "--no-hybrid",
+                 "--sph-history", str(user), "--out", str(out)]) == 0
+    seen["out"], seen["root"] = out, root
+    return seen
+
+
+def test_killed_run_leaves_the_previous_results_intact(rerun_after_kill):
+    """Killed after Table 1 (a later step raises): the old folder is untouched, so table1.md and
+    report.md still name the same SPH source; a complete re-run then replaces the whole set."""
+    seen = rerun_after_kill
+    # the killed run had read the FloatingInfo file: Newton in case 1 (F_tot = m z̈ → α = m)
+    assert "second_run.csv" in seen["partial_table1_md"]
+    assert seen["partial_table1"]["SPH"]["1"]["alpha"] == pytest.approx(M, rel=1e-6)
+    assert seen["after_kill"] == seen["before"]
+    for text in seen["texts_after_kill"].values():
+        assert "sph_regular_waves.nc" in text and "second_run.csv" not in text
+    assert not seen["partial_left"]
+
+    out = seen["out"]
     for name in ("table1.md", "report.md"):
         text = (out / name).read_text()
-        assert "second_run.csv" in text and "first_run.csv" not in text
-    assert json.loads((out / "table1.json").read_text())["SPH"]["1"]["alpha"] == pytest.approx(
-        M, rel=1e-6)
-    assert not list(tmp_path.glob(".res.*"))
+        assert "bem_regular_waves.nc" in text and "sph_regular_waves.nc" not in text
+    # the whole set replaced: what only the full quick run writes is gone
+    assert not (out / "kramer_hybrid.json").exists() and not (out / "fig1_decay.png").exists()
+    assert not list(seen["root"].glob(".res.*"))
 
 
 def test_out_folder_with_foreign_files_is_refused(tmp_path, capsys):

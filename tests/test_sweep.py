@@ -63,7 +63,8 @@ def test_sweep_resumes_after_kill(tmp_path, coeff_file):
         f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
         "from hybridwsi.sweep import SweepConfig, case_grid, run_sweep\n"
         f"run_sweep(case_grid({HS!r}, {TP!r}, {SEEDS}), {str(out)!r}, SweepConfig(duration="
-        f"{DURATION!r}, dt={DT!r}, coeffs={str(coeff_file)!r}, ramp=0.5), progress=False)\n"
+        f"{DURATION!r}, dt={DT!r}, coeffs={str(coeff_file)!r}, ramp=0.5), progress=False,"
+        " n_workers=1)\n"
     )
     proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -90,8 +91,10 @@ def test_sweep_resumes_after_kill(tmp_path, coeff_file):
     assert "\n" not in str(err.value)
     assert finished_cases(out) == done_before
     # a kill during consolidation leaves a partial store folder: the next run removes it
+    # (resumed on a LocalCluster of one worker process: each worker costs a few seconds)
     (out / ".sweep.killed" / "sweep.zarr").mkdir(parents=True)
-    store = run_sweep(case_grid(HS, TP, SEEDS), out, _config(coeff_file), progress=False)
+    store = run_sweep(case_grid(HS, TP, SEEDS), out, _config(coeff_file), progress=False,
+                      n_workers=1)
     assert not list(out.glob(".sweep.*"))
 
     # finished parts were skipped, not recomputed
@@ -104,9 +107,10 @@ def test_sweep_resumes_after_kill(tmp_path, coeff_file):
     assert manifest["status"] == "complete" and manifest["n_cases"] == 20
     assert manifest["settings"]["ramp"] == 0.5 and len(manifest["settings_hash"]) == 64
 
-    # the resumed store holds exactly what an uninterrupted sweep writes
+    # the resumed store holds exactly what an uninterrupted sweep writes (run in this process:
+    # the same numbers as on the workers, bit for bit, and no second cluster to start)
     ref = open_sweep(run_sweep(case_grid(HS, TP, SEEDS), tmp_path / "ref", _config(coeff_file),
-                               progress=False))
+                               scheduler="synchronous", progress=False))
     xr.testing.assert_identical(ds.load(), ref.load())
 
     # a case in the store equals an independent direct Cummins run of the same sea

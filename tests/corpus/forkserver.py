@@ -71,6 +71,8 @@ def _child(req: dict) -> None:
 
 def main() -> None:
     _preload()
+    import gc
+    gc.freeze()
     for line in sys.stdin:
         req = json.loads(line)
         pid = os.fork()

@@ -301,7 +301,16 @@ def decay_modes(t: np.ndarray, y: np.ndarray, omegas: Sequence[float],
     p0 = np.concatenate([np.ravel([[zeta0 * w, w, y[0] / scale if m == 0 else 0.0, 0.0]
                                    for m, w in enumerate(omegas)]),
                          np.tile([0.1 * omegas[0], 0.0], aperiodic)])
-    fit = scipy.optimize.least_squares(lambda p: model(p) - y / scale, p0, x_scale="jac")
+    # each mode's ω stays within a factor 2 of its start and |σ| ≤ 2ω: the modes of a decay
+    # are known that well from the linear model, and without bounds a weakly excited mode can
+    # escape to the sampling frequency or swap with the other (the fit then depends on
+    # round-off, e.g. on the BLAS thread count)
+    lo = np.concatenate([np.ravel([[-2 * w, 0.5 * w, -np.inf, -np.inf] for w in omegas]),
+                         np.tile([-np.inf, -np.inf], aperiodic)])
+    hi = np.concatenate([np.ravel([[2 * w, 2 * w, np.inf, np.inf] for w in omegas]),
+                         np.tile([np.inf, np.inf], aperiodic)])
+    fit = scipy.optimize.least_squares(lambda p: model(p) - y / scale, p0, bounds=(lo, hi),
+                                       x_scale="jac")
     if not fit.success or np.sqrt(np.mean(fit.fun**2)) > 0.01 * np.std(y / scale):
         raise SolverError("decay_modes: the damped-mode fit does not describe the decay")
     return [(float(s / math.hypot(s, w)), float(math.hypot(s, w)))
