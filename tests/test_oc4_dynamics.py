@@ -118,9 +118,10 @@ def test_added_mass_and_damping_against_wamit(shipped):
 # ------------------------------------------------------------------------- natural frequencies
 def test_natural_frequencies_of_the_six_modes(system):
     """Heave within 3 % of the code comparison (measured +0.2 %). Surge/sway (-4.9 %) and
-    roll/pitch (+5 %) are not: with the infinite-frequency added mass held (as a 60 s
-    radiation kernel leaves the slow surge mode) the surge frequency is the quoted 0.0093 Hz,
-    and pitch with surge held is within 3 % of the quoted 0.0373 Hz (docs/OC4_SEMI.md)."""
+    roll/pitch (+5 %) are not: the quoted values follow simpler estimates of the same
+    system — surge with the infinite-frequency added mass is the quoted 0.0093 Hz, pitch with
+    surge held is within 3 % of the quoted 0.0373 Hz (docs/OC4_SEMI.md, which also shows that
+    a 60 s radiation kernel does carry A(ω) to the surge mode)."""
     modes = {m.dominant_dof: m for m in semi_modes(system)}
     assert set(modes) == set(RIGID_DOFS)
     ref = CASE["reference_natural_frequencies"]
