@@ -21,22 +21,38 @@ A(ω), B(ω) (:func:`hybridwsi.report.fowt.frequency_response`).
 
 from __future__ import annotations
 
+import json
 import math
+import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
+import scipy.integrate
+import scipy.linalg
 import xarray as xr
+from scipy.interpolate import CubicSpline
 
 from hybridwsi.casemodel import case_coefficients, radiation_ss
 from hybridwsi.cases import Case, load_case
-from hybridwsi.dofs import RIGID_DOFS
+from hybridwsi.cummins import simulate
+from hybridwsi.diagnostic.regression import regress
+from hybridwsi.dofs import RIGID_DOFS, motion_unit
 from hybridwsi.errors import InputError
+from hybridwsi.files import atomic_write
 from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberMorison, \
-    MooringSystem
+    MooringForce, MooringSystem
+from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import Mode, natural_frequencies
-from hybridwsi.report.fowt import decay_frequency, decay_histories, rao_curve, rao_point
+from hybridwsi.report import fowt_diagnostic as fd
+from hybridwsi.report.fowt import decay_figure, decay_frequency, decay_histories, rao_curve, \
+    rao_point
+from hybridwsi.report.plots import save
+from hybridwsi.waves import JONSWAP
 
 #: initial offsets of the free decays [m, m, m, rad, rad, rad]: small (linear mooring)
 SEMI_DECAY_OFFSET = {"Surge": 5.0, "Sway": 5.0, "Heave": 1.0, "Roll": 0.02, "Pitch": 0.02,
@@ -65,7 +81,6 @@ class SemiSystem:
     dofs : tuple of str
         The six DOFs.
     """
-
     coeffs: xr.Dataset
     mooring: np.ndarray
     drag: np.ndarray
@@ -180,10 +195,6 @@ def semi_sea_history(system: SemiSystem, case: Mapping[str, Any] | None = None, 
     """A nonlinear six-DOF Cummins run in a long-crested JONSWAP sea at ``heading_deg`` [deg]:
     the radiation state space, MoorPy's tabulated mooring (F(q) − F0) and every member's
     Morison drag on the relative velocity with the Airy kinematics (``F_ext`` their sum)."""
-    from hybridwsi.cummins import simulate
-    from hybridwsi.forces import MooringForce
-    from hybridwsi.waves import JONSWAP
-
     case = load_case("oc4_semi") if case is None else case
     wave = JONSWAP(hs=hs, tp=tp, seed=seed, n_components=n_components,
                    direction=math.radians(heading_deg))
@@ -204,8 +215,6 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
     verdict (spectral radius of the Newmark lagged step at the history's Δt) and, for the
     linear known parts 1–3, the observed lagged run of the regressed surrogate
     (:mod:`hybridwsi.report.fowt_diagnostic`, the OC3 analysis in six DOFs)."""
-    from hybridwsi.report import fowt_diagnostic as fd
-
     dofs = [str(d) for d in hist["dof"].values]
     dt = float(hist["time"].values[1] - hist["time"].values[0])
     parts = fd.partitions(hist, Hydrostatic(system.mooring), LinearDamping(np.zeros((6, 6))))
@@ -233,9 +242,7 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
 
 
 def _quiet_regress(hist: xr.Dataset, known: Sequence[KnownComponent], accuracy: float) -> Any:
-    import warnings
 
-    from hybridwsi.diagnostic.regression import regress
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -246,10 +253,6 @@ def semi_mode_variants(system: SemiSystem) -> dict[str, float]:
     """Surge and pitch frequencies [Hz] of the variants behind the natural-frequency table of
     docs/OC4_SEMI.md: the coupled surge–pitch pair with A(ω) at the mode's own frequency or
     with A∞, and pitch alone (surge held) with either; rigid mass, C_hs + K_moor."""
-    import scipy.linalg
-
-    from hybridwsi.hydro import coefficients as co
-
     c = system.coeffs
     m = co.matrix(c, "mass")
     k = co.matrix(c, "hydrostatic_stiffness") + system.mooring
@@ -276,9 +279,6 @@ def mooring_amplitude_ratio(case: Mapping[str, Any], dof: str, amplitudes: Seque
     ``dof`` at each amplitude [m or rad], over its small-amplitude frequency (same mass): the
     period is ∮ dx / v with ½ m v² = V(X) − V(x), taken on each side of rest (the catenaries
     are not symmetric in surge)."""
-    import scipy.integrate
-    from scipy.interpolate import CubicSpline
-
     system = MooringSystem.from_case(case)
     i = RIGID_DOFS.index(dof)
     top = 1.2 * max(amplitudes)
@@ -308,8 +308,6 @@ SEMI_RAO_HEADINGS = (0.0, 30.0, 60.0)
 
 def semi_decay_figure(decays: Mapping[str, Mapping[str, Any]]) -> tuple[Any, xr.Dataset]:
     """The six free decays, each in its released DOF [m or rad] against time [s]."""
-    from hybridwsi.report.fowt import decay_figure
-
     return decay_figure({d: v["history"] for d, v in decays.items()},
                         {d: f"{d}: {v['hz']:.5f} Hz (zero crossings)" for d, v in decays.items()},
                         columns=2, title="OC4-DeepCwind semi free decays (6-DOF linear Cummins, "
@@ -320,10 +318,6 @@ def semi_rao_figure(points: Sequence[Mapping[str, Any]], omegas: np.ndarray,
                     curves: np.ndarray, headings: Sequence[float]) -> tuple[Any, xr.Dataset]:
     """|X|/a [m/m, rad/m] per DOF: frequency-domain curves per heading (BEM A(ω), B(ω)) with
     the time-domain steady-state points on them."""
-    import matplotlib.pyplot as plt
-
-    from hybridwsi.dofs import motion_unit
-
     fig, axes = plt.subplots(3, 2, figsize=(10, 8), sharex=True)
     td = np.full((len(headings), len(SEMI_RAO_PERIODS), 6), np.nan)
     w_td = 2 * math.pi / np.asarray(SEMI_RAO_PERIODS)
@@ -373,13 +367,6 @@ def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> s
     """Write ``out/fowt_semi/`` (natural frequencies, decays, RAOs at three headings, the 6×6
     diagnostic in a 30° sea; JSON, PNG and the NetCDF behind each figure) and return the
     report section (Markdown). ``quick``: every other RAO period, a 300 s sea."""
-    import json
-    import time
-    from pathlib import Path
-
-    from hybridwsi.files import atomic_write
-    from hybridwsi.report.plots import save
-
     start = time.time()
 
     def log(msg: str) -> None:
