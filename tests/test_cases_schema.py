@@ -208,7 +208,8 @@ def test_every_number_of_the_schema_says_its_unit():
             "lr", "input_noise", "val_fraction", "weight_decay", "perturbation",
             "turbulence_intensity", "pitch_ki",
             "cd", "ca",  # members' Morison coefficients (axial_cd: a list of them)
-            "tol"}  # [radiation] relative fit error
+            "tol",  # [radiation] relative fit error
+            "spreading"}  # [simulation] cos-2s exponent s
     for at, node in iter_nodes(CASE):
         if isinstance(node, Number) and not node.integer and node.unit == "":
             name = at[-1]

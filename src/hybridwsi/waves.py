@@ -25,11 +25,34 @@ Spectra (single-sided, in ω, [m² s/rad]):
 A realisation uses ``n_components`` equally spaced frequencies ``ω_j`` (mid-points of bins of
 width Δω over ``omega_range``), amplitudes ``a_j = sqrt(2 S(ω_j) Δω)`` and phases uniform on
 [0, 2π) drawn from ``numpy.random.default_rng(seed)``; it repeats after ``2π/Δω``.
+
+Directions: a wave travels towards its heading ``direction`` β [rad] from +X (Capytaine's
+``wave_direction``; 0: along +X). A JONSWAP sea may be short-crested with the cos-2s spreading
+function of Longuet-Higgins et al. (1963) (DNV-RP-C205 §3.5.8 with the half-angle cosine)
+
+    S(ω, θ) = S(ω) D(θ − β),   D(θ) = Γ(s + 1) / (2 √π Γ(s + ½)) cos^{2s}(θ/2),  |θ| ≤ π,
+
+whose integral over θ is 1 (so ∫∫ S D dθ dω = m0 = Hs²/16) and whose mean cos θ is s/(s + 1).
+The realisation is the single-summation one (each frequency component has its own direction,
+which keeps the sea ergodic and the amplitudes those of the long-crested sea): component j
+travels towards ``β + F⁻¹((π_j + ½)/N)``, ``F`` the cumulative D (closed form with the
+regularised incomplete beta function, :func:`spreading_quantile`) and ``π`` a permutation of
+0 … N−1 drawn from the same generator after the phases, so a spread sea has the phases of the
+long-crested sea of the same seed, and the same elevation at the origin.
+
+A BEM excitation is stored at a few headings; a component's transfer function at any heading
+comes from :func:`excitation_transfer`: the stored heading itself, else the body's symmetry
+(:func:`heading_symmetry`: axisymmetric bodies from any one heading; a columns hull with the
+dihedral symmetry of order n from [0, π/n]), else linear interpolation of the real and
+imaginary parts between the two nearest stored headings (as HydroDyn does with WAMIT's), of
+the forces and moments in each wave's own frame (x along its heading), so that the part of
+the variation that is the wave turning is exact and only the shape's part is interpolated.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -38,8 +61,10 @@ import numpy as np
 import scipy.fft
 import scipy.integrate
 import scipy.optimize
+import scipy.special
 import xarray as xr
 
+from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
 
 G = 9.81
@@ -109,6 +134,14 @@ class WaveComponents:
     amplitude: np.ndarray  # [m]
     omega: np.ndarray  # [rad/s]
     phase: np.ndarray  # [rad]
+    #: propagation direction [rad] of each component; None: the wave's one ``direction``
+    direction: np.ndarray | None = None
+
+    def directions(self, default: float = 0.0) -> np.ndarray:
+        """Direction [rad] of every component (``default`` when the wave has one direction)."""
+        if self.direction is None:
+            return np.full(self.omega.shape, float(default))
+        return np.asarray(self.direction, dtype=float)
 
     @property
     def complex_amplitude(self) -> np.ndarray:
@@ -127,6 +160,11 @@ class Wave:
 
     def components(self) -> WaveComponents:  # pragma: no cover - abstract
         raise NotImplementedError
+
+    def component_directions(self, comp: WaveComponents | None = None) -> np.ndarray:
+        """Propagation direction [rad] of each component of ``comp`` (default: this wave's)."""
+        comp = self.components() if comp is None else comp
+        return comp.directions(float(getattr(self, "direction", 0.0)))
 
     def elevation(self, t: np.ndarray) -> np.ndarray:
         """Incident wave elevation η(t) [m] at the origin."""
@@ -198,6 +236,22 @@ def _pm_shape(omega: np.ndarray, hs: float, wp: float) -> np.ndarray:
     return out
 
 
+def spreading_function(theta: Any, s: float) -> np.ndarray:
+    """cos-2s directional spreading ``D(θ) = Γ(s+1) / (2 √π Γ(s+½)) cos^{2s}(θ/2)`` [1/rad]
+    at angles ``θ`` [rad] from the mean direction (wrapped to (−π, π]); ∫ D dθ = 1."""
+    th = np.angle(np.exp(1j * np.asarray(theta, dtype=float)))
+    norm = math.exp(math.lgamma(s + 1.0) - math.lgamma(s + 0.5)) / (2.0 * math.sqrt(math.pi))
+    return norm * np.abs(np.cos(0.5 * th)) ** (2.0 * s)
+
+
+def spreading_quantile(p: Any, s: float) -> np.ndarray:
+    """Inverse of the cumulative cos-2s spreading, θ [rad] in (−π, π) with ``F(θ) = p``:
+    ``F(θ) = ½ + ½ sgn(θ) I_{sin²(θ/2)}(½, s + ½)`` (I the regularised incomplete beta)."""
+    q = 2.0 * np.asarray(p, dtype=float) - 1.0
+    x = scipy.special.betaincinv(0.5, s + 0.5, np.abs(q))
+    return np.sign(q) * 2.0 * np.arcsin(np.sqrt(x))
+
+
 @dataclass
 class JONSWAP(Wave):
     """Irregular JONSWAP sea state (see module docstring for the formulas).
@@ -217,7 +271,10 @@ class JONSWAP(Wave):
     omega_range : (float, float), optional
         Frequency band [rad/s]; default ``(0.5 ωp, 4 ωp)`` (holds > 99 % of m0 for γ = 3.3).
     direction : float
-        Propagation direction [rad].
+        Propagation direction [rad] (the mean direction of a spread sea).
+    spreading : float, optional
+        Exponent s > 0 of the cos-2s spreading function (module docstring; wind sea about
+        5–15, swell 25 and more); None: long-crested.
     """
 
     hs: float
@@ -227,6 +284,7 @@ class JONSWAP(Wave):
     n_components: int = 200
     omega_range: tuple[float, float] | None = None
     direction: float = 0.0
+    spreading: float | None = None
     _norm: float = field(default=1.0, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -243,6 +301,10 @@ class JONSWAP(Wave):
         if not (0 < lo < hi and np.isfinite(hi)):
             raise InputError(f"omega_range must satisfy 0 < low < high, got {self.omega_range}")
         self.omega_range = (lo, hi)
+        if not np.isfinite(self.direction):
+            raise InputError(f"wave direction must be finite, got {self.direction}")
+        if self.spreading is not None:
+            self.spreading = _positive("spreading exponent s", self.spreading)
         self._norm = 1.0
         self._norm = self.hs**2 / 16 / spectral_moment(self.spectrum, self.omega_p)
 
@@ -264,11 +326,27 @@ class JONSWAP(Wave):
         dw = (hi - lo) / self.n_components
         w = lo + dw * (np.arange(self.n_components) + 0.5)
         amp = np.sqrt(2 * self.spectrum(w) * dw)
-        phase = np.random.default_rng(self.seed).uniform(0, 2 * np.pi, w.size)
-        return WaveComponents(amp, w, phase)
+        rng = np.random.default_rng(self.seed)
+        phase = rng.uniform(0, 2 * np.pi, w.size)
+        if self.spreading is None:
+            return WaveComponents(amp, w, phase)
+        # equal-probability directions, one per component, assigned by a seeded permutation
+        # drawn after the phases (module docstring)
+        p = (rng.permutation(w.size) + 0.5) / w.size
+        return WaveComponents(amp, w, phase,
+                              self.direction + spreading_quantile(p, self.spreading))
+
+    def directional_spectrum(self, omega: Any, theta: Any) -> np.ndarray:
+        """``S(ω) D(θ − β)`` [m² s/rad²] at frequencies ``omega`` [rad/s] and directions
+        ``theta`` [rad] (broadcast); needs ``spreading``."""
+        if self.spreading is None:
+            raise InputError("a long-crested sea has no directional density (give spreading)")
+        return self.spectrum(omega) * spreading_function(np.asarray(theta) - self.direction,
+                                                          self.spreading)
 
     def to_dict(self) -> dict[str, Any]:
-        d = {k: v for k, v in asdict(self).items() if not k.startswith("_")}
+        d = {k: v for k, v in asdict(self).items() if not k.startswith("_")
+             and not (k == "spreading" and v is None)}  # long-crested: as before spreading
         return {"type": type(self).__name__.lower(), **d}
 
 
@@ -276,9 +354,10 @@ class PiersonMoskowitz(JONSWAP):
     """Pierson–Moskowitz sea state: JONSWAP with γ = 1 (fully developed sea)."""
 
     def __init__(self, hs: float, tp: float, seed: int = 0, n_components: int = 200,
-                 omega_range: tuple[float, float] | None = None, direction: float = 0.0):
+                 omega_range: tuple[float, float] | None = None, direction: float = 0.0,
+                 spreading: float | None = None):
         super().__init__(hs=hs, tp=tp, gamma=1.0, seed=seed, n_components=n_components,
-                         omega_range=omega_range, direction=direction)
+                         omega_range=omega_range, direction=direction, spreading=spreading)
 
 
 class ElevationRecord(Wave):
@@ -522,6 +601,10 @@ class AiryKinematics:
         keep = (comp.amplitude > 0) & (comp.omega > 0)  # a still level (ω = 0) has no flow
         omega, amp = comp.omega[keep], comp.amplitude[keep]
         k = dispersion_k(omega, depth, g)
+        if comp.direction is not None and np.ptp(wave.component_directions(comp)) > 0:
+            raise InputError("the wave kinematics along a line (an axisymmetric body's Morison "
+                             "strips) take a long-crested sea; a spread sea needs the members' "
+                             "kinematics (AiryPoints)")
         beta = float(getattr(wave, "direction", 0.0))
         self.cos_beta, self.sin_beta = math.cos(beta), math.sin(beta)
         # phase at the line's horizontal position, folded into the component phase
@@ -562,9 +645,10 @@ class AiryKinematics:
 class AiryPoints:
     """Linear (Airy) wave particle velocity and acceleration at scattered points ``(x, y, z)``
     (the elements of a frame of members), formulas of :class:`AiryKinematics` with the phase
-    ``θ_ij = ω_j t + φ_j − k_j (x_i cos β + y_i sin β)`` per point:
+    ``θ_ij = ω_j t + φ_j − k_j (x_i cos β_j + y_i sin β_j)`` per point (β_j the component's
+    direction: the wave's one direction, or its own in a spread sea):
 
-        u_h = Σ_j P_ij cos θ_ij (along β),   w = −Σ_j Q_ij sin θ_ij,
+        u_h = Σ_j P_ij cos θ_ij (along β_j),   w = −Σ_j Q_ij sin θ_ij,
         ∂u_h/∂t = −Σ_j ω_j P_ij sin θ_ij,      ∂w/∂t = −Σ_j ω_j Q_ij cos θ_ij,
 
     ``P_ij = a_j ω_j cosh(k_j (z_i + h)) / sinh(k_j h)``, ``Q_ij`` the same with sinh. The
@@ -595,27 +679,37 @@ class AiryPoints:
         keep = comp.amplitude > 0
         omega, amp = comp.omega[keep], comp.amplitude[keep]
         k = dispersion_k(omega, depth, g)
-        beta = float(getattr(wave, "direction", 0.0))
-        self.direction = np.array([math.cos(beta), math.sin(beta)])
+        beta = wave.component_directions(comp)[keep]
+        #: (n_comp, 2) unit horizontal direction of each component
+        self.direction = np.column_stack([np.cos(beta), np.sin(beta)])
         self.omega = omega
         #: (n, n_comp) phase at each point [rad]
-        self.phase = comp.phase[keep] - np.outer(pts[:, :2] @ self.direction, k)
+        self.phase = comp.phase[keep] - (pts[:, :2] @ self.direction.T) * k
         self.horizontal = airy_depth_factor(k, pts[:, 2], depth) * (amp * omega)
         self.vertical = airy_vertical_factor(k, pts[:, 2], depth) * (amp * omega)
         self.ramp = float(ramp)
+        # the sums as one complex matrix-vector product per call: Σ_j P_ij cos θ_ij =
+        # Re Σ_j (P_ij e^{iφ_ij}) e^{iω_j t}, so a call costs n_comp exponentials instead of
+        # n × n_comp cosines and sines (rows: u_x, u_y, w of every point)
+        e_phase = np.exp(1j * self.phase)
+        self._amplitudes = np.concatenate([
+            self.horizontal * self.direction[:, 0] * e_phase,
+            self.horizontal * self.direction[:, 1] * e_phase,
+            self.vertical * e_phase])
 
     def velocity_acceleration(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Velocity [m/s] and acceleration [m/s²] at one time ``t`` [s], each (n, 3)."""
-        theta = self.omega * float(t) + self.phase
-        c, s = np.cos(theta), np.sin(theta)
-        uh = np.sum(self.horizontal * c, axis=1)
-        w = -np.sum(self.vertical * s, axis=1)
-        ah = -np.sum(self.horizontal * s * self.omega, axis=1)
-        aw = -np.sum(self.vertical * c * self.omega, axis=1)
+        """Velocity [m/s] and acceleration [m/s²] at one time ``t`` [s], each (n, 3).
+
+        u_x + i(·) = Σ_j C_ij e^{iω_j t}: velocity Re (horizontal), −Im (vertical); the
+        acceleration is the same sum with ω_j e^{iω_j t}: −Im (horizontal), −Re (vertical).
+        """
+        phasor = np.exp(1j * self.omega * float(t))
+        both = self._amplitudes @ np.stack([phasor, self.omega * phasor], axis=1)  # (3n, 2)
+        n = self.phase.shape[0]
         f = float(ramp_factor(np.array([float(t)]), self.ramp)[0]) if self.ramp else 1.0
-        vel = np.column_stack([uh * self.direction[0], uh * self.direction[1], w]) * f
-        acc = np.column_stack([ah * self.direction[0], ah * self.direction[1], aw]) * f
-        return vel, acc
+        vel = np.concatenate([both[:2 * n, 0].real, -both[2 * n:, 0].imag]) * f
+        acc = np.concatenate([-both[:2 * n, 1].imag, -both[2 * n:, 1].real]) * f
+        return vel.reshape(3, n).T, acc.reshape(3, n).T
 
 
 def particle_velocity(wave: Wave, t: float | np.ndarray, x: float, z: Any, *, y: float = 0.0,
@@ -634,9 +728,125 @@ def particle_velocity(wave: Wave, t: float | np.ndarray, x: float, z: Any, *, y:
     return u, w
 
 
-def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """ω grid [rad/s] and F_e(ω, dof) [N/m] for ``dofs`` and the wave ``direction`` [rad].
+def heading_symmetry(coeffs: xr.Dataset) -> int | None:
+    """The body's symmetry about the vertical axis through the coefficients' origin, from
+    ``attrs["body"]``: 0 axisymmetric (spar, sphere), ``n`` the dihedral group of order n
+    (a ``ColumnsBody`` with ``symmetry = n``: n-fold rotation and a mirror plane xOz), None
+    unknown (the stored headings only)."""
+    raw = coeffs.attrs.get("body")
+    try:
+        body = json.loads(raw) if isinstance(raw, str) else {}
+    except ValueError:
+        return None
+    hull = body.get("hull", body) if isinstance(body, dict) else {}
+    ref = np.asarray(coeffs.attrs.get("reference_point", (0.0, 0.0, 0.0)), dtype=float)
+    if not isinstance(hull, dict) or ref.size < 2 or np.any(np.abs(ref.reshape(-1)[:2]) > 1e-9):
+        return None  # symmetry about an axis that is not the phase origin's: not used
+    if hull.get("type") in ("AxisymmetricBody", "FloatingSphere"):
+        return 0
+    order = hull.get("symmetry")
+    if hull.get("type") == "ColumnsBody" and isinstance(order, int) and order >= 1:
+        return order
+    return None
+
+
+def _rotation(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def _mirror(angle: float) -> np.ndarray:
+    """Reflection of the horizontal plane across the line at ``angle`` [rad] from +X."""
+    c, s = math.cos(2 * angle), math.sin(2 * angle)
+    return np.array([[c, s], [s, -c]])
+
+
+def _dof_map(q: np.ndarray) -> np.ndarray:
+    """6×6 map of a (force, moment) vector under the horizontal orthogonal map ``q`` (z kept):
+    forces transform as vectors, moments as pseudo-vectors (times det q)."""
+    q3 = np.eye(3)
+    q3[:2, :2] = q
+    out = np.zeros((6, 6))
+    out[:3, :3], out[3:, 3:] = q3, np.linalg.det(q) * q3
+    return out
+
+
+def _reduce_heading(beta: float, order: int | None, stored: np.ndarray
+                    ) -> tuple[float, np.ndarray]:
+    """``(β', Q)`` with ``β = Q β'`` and β' a heading the stored ones cover (module
+    docstring): the body's symmetry group maps the excitation as ``F(Qβ') = T(Q) F(β')``."""
+    if order == 0:  # axisymmetric: rotate the first stored heading onto β
+        return float(stored[0]), _rotation(beta - float(stored[0]))
+    if order is None:
+        return beta, np.eye(2)
+    sector = 2 * math.pi / order
+    k = math.floor(beta / sector + 1e-12)
+    b = beta - k * sector
+    q = _rotation(k * sector)
+    if b > 0.5 * sector + 1e-12:  # the mirror line at π/n
+        b, q = sector - b, q @ _mirror(0.5 * sector)
+    return max(b, 0.0), q
+
+
+def _stored_heading(vals: np.ndarray, dirs: np.ndarray, beta: float) -> np.ndarray:
+    """Excitation (n_omega, 6) at heading ``beta`` [rad]: a stored one within 1e-6 rad, else
+    linear in heading between the two stored ones around it (no extrapolation), in the frame
+    of each wave (x along its heading): the force turns with the wave, so what is left to
+    interpolate is what the body's shape adds (exact for a body of revolution)."""
+    rel = np.angle(np.exp(1j * (dirs - beta)))
+    i = int(np.argmin(np.abs(rel)))
+    if abs(rel[i]) <= 1e-6:
+        return vals[:, i]
+    lo = np.where(rel < 0, -rel, np.inf)
+    hi = np.where(rel > 0, rel, np.inf)
+    a, b = int(np.argmin(lo)), int(np.argmin(hi))
+    span = lo[a] + hi[b]
+    if not (np.isfinite(span) and span < math.pi):
+        raise InputError(f"no excitation force for wave direction {beta:g} rad: the "
+                         f"coefficients' headings {', '.join(f'{d:g}' for d in dirs)} rad "
+                         "do not surround it (and the body's symmetry does not give it)")
+    fa = vals[:, a] @ _dof_map(_rotation(-float(dirs[a]))).T  # into each wave's frame
+    fb = vals[:, b] @ _dof_map(_rotation(-float(dirs[b]))).T
+    return ((hi[b] * fa + lo[a] * fb) / span) @ _dof_map(_rotation(beta)).T
+
+
+def _dihedral_heading(six: np.ndarray, dirs: np.ndarray, beta: float, order: int
+                      ) -> np.ndarray | None:
+    """F_e(ω, 6 DOFs) at heading ``beta`` [rad] of a body with the dihedral symmetry of
+    ``order`` n, from the stored headings in [0, π/n] by trigonometric interpolation in each
+    wave's frame: there the force is periodic in β with period 2π/n and, by the mirror xOz,
+    even (surge, heave, pitch: Σ a_p cos(p n β)) or odd (sway, roll, yaw: Σ b_p sin(p n β));
+    m + 1 stored headings k π/(n m) fit a_0 … a_m and b_1 … b_(m−1) exactly (the odd part
+    vanishes on the mirror lines 0 and π/n). None when the stored headings do not allow it
+    (fewer than two in [0, π/n], or a singular fit)."""
+    half = math.pi / order
+    inside = [(float(d), i) for i, d in enumerate(dirs) if -1e-9 <= d <= half + 1e-9]
+    inside.sort()
+    if len(inside) < 2 or inside[0][0] > 1e-9 or inside[-1][0] < half - 1e-9:
+        return None
+    h = np.array([d for d, _ in inside])
+    fw = np.stack([six[:, i] @ _dof_map(_rotation(-d)).T for d, i in inside], axis=1)
+    out = np.empty((six.shape[0], 6), dtype=complex)
+    interior = (h > 1e-9) & (h < half - 1e-9)
+    n_odd = int(interior.sum())
+    for cols, basis, rows in (((0, 2, 4), np.cos, np.ones(h.size, bool)), ((1, 3, 5), np.sin,
+                                                                         interior)):
+        p = np.arange(h.size) if basis is np.cos else np.arange(1, n_odd + 1)
+        m = basis(np.outer(h[rows], p) * order)
+        if m.size and np.linalg.cond(m) > 1e8:
+            return None
+        coef = (np.linalg.solve(m, fw[:, rows][:, :, list(cols)].transpose(1, 0, 2).reshape(
+            m.shape[0], -1)) if m.size else np.zeros((0, six.shape[0] * 3)))
+        at = basis(p * order * beta)
+        out[:, list(cols)] = (at @ coef).reshape(six.shape[0], 3) if m.size else 0.0
+    return out @ _dof_map(_rotation(beta)).T
+
+
+def excitation_transfer(coeffs: xr.Dataset, dofs: list[str], directions: Any
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """ω grid [rad/s] and F_e(ω, heading, dof) [N/m, N m/m] at each wave ``directions`` [rad]
+    (module docstring: a stored heading, else the body's symmetry, else linear interpolation
+    between the stored headings). Shape (n_omega, n_directions, n_dof).
 
     Positional indexing on the stored arrays: xarray's label selection costs more than the
     rest of a short simulation.
@@ -648,25 +858,56 @@ def _excitation_transfer(coeffs: xr.Dataset, dofs: list[str], direction: float
     missing = [d for d in dofs if d not in have]
     if missing:
         raise InputError(f"excitation_force has no DOF {missing}")
-    vals = np.asarray(fe.values)
-    if "wave_direction" in fe.dims:
-        dirs = np.asarray(coeffs["wave_direction"].values, dtype=float).reshape(-1)
-        gap = np.abs(np.angle(np.exp(1j * (dirs - direction))))
-        i = int(np.argmin(gap))
-        if gap[i] > 1e-6:
-            raise InputError(f"no excitation force for wave direction {direction:g} rad "
-                             f"(have {', '.join(f'{d:g}' for d in dirs)})")
-        vals = vals.take(i, axis=fe.dims.index("wave_direction"))
     dims = [d for d in fe.dims if d != "wave_direction"]
     if sorted(dims) != ["influenced_dof", "omega"]:
         raise InputError(f"excitation_force has dimensions {fe.dims}; expected omega, "
                          "influenced_dof and optionally wave_direction")
-    vals = vals.take([have.index(d) for d in dofs], axis=dims.index("influenced_dof"))
-    if dims[0] != "omega":
-        vals = vals.T
+    order = ["omega", "wave_direction", "influenced_dof"] if "wave_direction" in fe.dims \
+        else ["omega", "influenced_dof"]
+    vals = np.asarray(fe.transpose(*order).values)
+    if vals.ndim == 2:
+        vals = vals[:, None, :]
     if not np.all(np.isfinite(vals)):
         raise InputError("excitation_force contains NaN/inf")
-    return np.asarray(coeffs["omega"].values, dtype=float), vals
+    dirs = (np.asarray(coeffs["wave_direction"].values, dtype=float).reshape(-1)
+            if "wave_direction" in fe.dims else np.zeros(1))
+    # the full six-vector (missing DOFs 0) so the symmetry maps can mix the DOFs
+    six = np.zeros(vals.shape[:2] + (6,), dtype=complex)
+    rigid = tuple(RIGID_DOFS)
+    for j, name in enumerate(have):
+        if name in rigid:
+            six[:, :, rigid.index(name)] = vals[:, :, j]
+    absent = [rigid.index(d) for d in rigid if d not in have]
+    sym = heading_symmetry(coeffs)
+    beta = np.asarray(directions, dtype=float).reshape(-1)
+    out = np.empty((vals.shape[0], beta.size, len(dofs)), dtype=complex)
+    cache: dict[float, np.ndarray] = {}
+    for n, b in enumerate(beta):
+        key = round(float(b), 12)
+        if key not in cache:
+            cache[key] = _heading_force(vals, six, dirs, have, rigid, absent, sym, float(b), dofs)
+        out[:, n] = cache[key]
+    return np.asarray(coeffs["omega"].values, dtype=float), out
+
+
+def _heading_force(vals: np.ndarray, six: np.ndarray, dirs: np.ndarray, have: list[str],
+                   rigid: tuple[str, ...], absent: list[int], sym: int | None, beta: float,
+                   dofs: list[str]) -> np.ndarray:
+    """F_e(ω, dof) at one heading (:func:`excitation_transfer`)."""
+    rel = np.angle(np.exp(1j * (dirs - beta)))
+    if np.min(np.abs(rel)) <= 1e-6:  # a stored heading: as stored, any DOF
+        return vals[:, int(np.argmin(np.abs(rel)))][:, [have.index(d) for d in dofs]]
+    rows = [rigid.index(d) if d in rigid else -1 for d in dofs]
+    # another heading mixes the DOFs: all six needed, but a body of revolution's transverse
+    # DOFs are 0 at its stored heading, so missing ones are exact zeros there
+    if min(rows) < 0 or (absent and sym != 0):
+        raise InputError(f"wave direction {beta:g} rad: the excitation at a heading the "
+                         f"coefficients do not hold needs all six rigid DOFs (have {have})")
+    full = _dihedral_heading(six, dirs, beta, sym) if sym else None
+    if full is None:
+        base, q = _reduce_heading(beta, sym, dirs)
+        full = _stored_heading(six, dirs, base) @ _dof_map(q).T
+    return full[:, rows]
 
 
 def long_wave_limit(coeffs: xr.Dataset, dofs: list[str]) -> np.ndarray:
@@ -718,15 +959,23 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
         (no ramp) comes from the same harmonic sum, at no extra cost.
     """
     dofs = [dof] if isinstance(dof, str) else list(dof)
-    w_grid, vals = _excitation_transfer(coeffs, dofs, float(getattr(wave, "direction", 0.0)))
+    comp = wave.components()
+    beta = wave.component_directions(comp)[comp.amplitude > 0]
+    unique, which = np.unique(beta, return_inverse=True)
+    w_grid, vals = excitation_transfer(coeffs, dofs, unique)
     w, amplitude = components_within(wave, w_grid, "the coefficients' range",
                                      "narrow omega_range or recompute the BEM coefficients",
                                      allow_below=wave.long_waves)
     if w.size and w.min() < w_grid[0] * (1 - 1e-9):  # a record's long waves: towards ω = 0
         w_grid = np.concatenate([[0.0], w_grid])
-        vals = np.concatenate([long_wave_limit(coeffs, dofs)[None, :], vals])
-    tf = np.stack([np.interp(w, w_grid, vals[:, i].real) + 1j * np.interp(w, w_grid, vals[:, i].imag)
-                   for i in range(len(dofs))], axis=1)
+        limit = np.broadcast_to(long_wave_limit(coeffs, dofs), (1, unique.size, len(dofs)))
+        vals = np.concatenate([limit, vals])
+    tf = np.empty((w.size, len(dofs)), dtype=complex)
+    for u in range(unique.size):  # each heading's components (one for a long-crested sea)
+        sel = which == u
+        for i in range(len(dofs)):
+            tf[sel, i] = (np.interp(w[sel], w_grid, vals[:, u, i].real)
+                          + 1j * np.interp(w[sel], w_grid, vals[:, u, i].imag))
     c = amplitude[:, None]
     both = harmonic_sum(t, np.concatenate([c * tf, c], axis=1), w)
     force, eta = both[:, :-1], both[:, -1]

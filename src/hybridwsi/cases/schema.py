@@ -707,7 +707,11 @@ CASE = Table(fields={
         doc="defaults of hybridwsi sweep --case (and of simulate --case)"),
     "simulation": Table(fields={"duration": positive("s", "simulated time"),
                                 "dt": positive("s", "time step"),
-                                "ramp": nonnegative("s", "excitation ramp")},
+                                "ramp": nonnegative("s", "excitation ramp"),
+                                "wave_direction": Number(
+                                    unit="deg", doc="wave propagation direction from +X"),
+                                "spreading": positive(
+                                    "", "cos-2s spreading exponent s of a JONSWAP sea")},
                         doc="defaults of hybridwsi simulate --case (over [sweep])"),
     "regular_waves": Table(fields={
         "period": Either(options=(positive("s"), ListOf(item=positive("s"), min_length=1)),

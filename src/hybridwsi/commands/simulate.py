@@ -75,9 +75,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                           "(Wave1Elev); its excitation force from the coefficients' transfer "
                           "function; time 0 is the first sample")
     o.add_eta(p)
-    p.add_argument("--wave-direction", type=o.finite_float, default=0.0, metavar="DEG",
-                   help="wave propagation direction [deg] from +X (default 0); the "
-                        "coefficients must hold it")
+    p.add_argument("--wave-direction", type=o.finite_float, default=None, metavar="DEG",
+                   help="wave propagation direction [deg] from +X, the mean direction of a "
+                        "spread sea (default: the case's [simulation], else 0); a heading "
+                        "the coefficients hold, or one their body's symmetry or two stored "
+                        "headings around it give. The wind blows along +X (the rotor faces "
+                        "it), so this is the wave heading relative to the wind")
+    p.add_argument("--spreading", type=o.positive_float, default=None, metavar="S",
+                   help="JONSWAP short-crested: exponent s of the cos-2s spreading function "
+                        "(wind sea 5-15, swell >= 25; default: the case's [simulation], else "
+                        "long-crested)")
     p.add_argument("--jonswap-gamma", type=o.positive_float, default=None, metavar="GAMMA",
                    help="JONSWAP peak-enhancement factor (default 3.3, or the case's [sweep])")
     p.add_argument("--wave-components", type=o.positive_int, default=None, metavar="N",
@@ -138,7 +145,8 @@ def _case_defaults(case: Any) -> dict[str, Any]:
     sweep, sim = case.get("sweep", {}), case.get("simulation", {})
     out = dict(DEFAULTS)
     for key, name in (("duration", "duration"), ("dt", "dt"), ("ramp", "ramp"),
-                      ("gamma", "gamma"), ("wave_components", "wave_components")):
+                      ("gamma", "gamma"), ("wave_components", "wave_components"),
+                      ("wave_direction", "wave_direction"), ("spreading", "spreading")):
         value = sim.get(key, sweep.get(name))
         if value is not None:
             out[key] = value
@@ -164,7 +172,11 @@ def _check_sources(args: argparse.Namespace) -> None:
 
 def _wave(args: argparse.Namespace, coeffs: xr.Dataset, defaults: dict[str, Any]
           ) -> waves.Wave | None:
-    direction = math.radians(args.wave_direction)
+    direction = math.radians(args.wave_direction if args.wave_direction is not None
+                             else defaults.get("wave_direction", 0.0))
+    spreading = args.spreading if args.spreading is not None else defaults.get("spreading")
+    if args.spreading is not None and not args.jonswap:
+        raise InputError("--spreading spreads a JONSWAP sea: give --jonswap HS TP")
     if args.regular:
         return waves.Regular(period=args.regular[0], height=args.regular[1],
                              direction=direction)
@@ -173,7 +185,8 @@ def _wave(args: argparse.Namespace, coeffs: xr.Dataset, defaults: dict[str, Any]
         n = (args.wave_components if args.wave_components is not None
              else defaults["wave_components"])
         return waves.JONSWAP(hs=args.jonswap[0], tp=args.jonswap[1], gamma=gamma,
-                             seed=args.seed, n_components=n, direction=direction)
+                             seed=args.seed, n_components=n, direction=direction,
+                             spreading=spreading)
     if args.wave_elevation:
         return elevation_wave(coeffs, args.wave_elevation, args.eta, direction)
     if args.eta is not None:

@@ -224,22 +224,26 @@ def _unit_per_wave(dof: str) -> str:
     return f"{motion_unit(dof)}/m"
 
 
-def decay_figure(decays: dict[str, xr.Dataset]) -> tuple[plt.Figure, xr.Dataset]:
-    """Surge, heave and pitch free decays (each released in its own DOF)."""
-    fig, axes = plt.subplots(len(decays), 1, figsize=(7, 7))
+def decay_figure(decays: Mapping[str, xr.Dataset], titles: Mapping[str, str] | None = None,
+                 *, columns: int = 1, title: str = "OC3-Hywind free decays (3-DOF linear "
+                 "Cummins)") -> tuple[plt.Figure, xr.Dataset]:
+    """Free decays, each released in its own DOF [m or rad] against time [s]; ``titles``
+    per DOF (default: the OC3 offsets), panels in ``columns`` columns (filled down)."""
+    rows = -(-len(decays) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(7 + 2 * (columns - 1), 7), squeeze=False)
     data = {}
-    for ax, (dof, hist) in zip(np.atleast_1d(axes), decays.items()):
+    for ax, (dof, hist) in zip(axes.T.ravel(), decays.items()):
         t, z = hist["time"].values, hist["z"].sel(dof=dof).values
         ax.plot(t, z, lw=1)
         ax.set_xlabel("time [s]")
         ax.set_ylabel(f"{dof} [{motion_unit(dof)}]")
-        ax.set_title(f"{dof} decay from {DECAY_OFFSET[dof]:g} {motion_unit(dof)}", fontsize=9)
+        ax.set_title(titles[dof] if titles else
+                     f"{dof} decay from {DECAY_OFFSET[dof]:g} {motion_unit(dof)}", fontsize=9)
         ax.grid(alpha=0.3)
         data[dof] = xr.DataArray(z, coords={f"time_{dof}": t}, dims=(f"time_{dof}",),
                                  attrs={"units": motion_unit(dof)})
     fig.tight_layout()
-    ds = xr.Dataset(data, attrs={"title": "OC3-Hywind free decays (3-DOF linear Cummins)"})
-    return fig, ds
+    return fig, xr.Dataset(data, attrs={"title": title})
 
 
 def rao_figure(points: Sequence[dict[str, Any]], omegas: np.ndarray, curve: np.ndarray,

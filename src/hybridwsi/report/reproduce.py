@@ -506,6 +506,10 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
 
         _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
         fowt_md = run_fowt(out, quick=quick, progress=progress)
+        from hybridwsi.report.fowt_semi import run_fowt_semi
+
+        _log("OC4-DeepCwind semi: natural frequencies, decays, RAOs, 6x6 diagnostic", progress)
+        fowt_md += "\n" + run_fowt_semi(out, quick=quick, progress=progress)
 
     outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
                           force_accuracy=acc["BEM"]) if hybrid else "")
