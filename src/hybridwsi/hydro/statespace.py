@@ -49,14 +49,12 @@ LOW_FREQUENCY = ("auto", "zero", "free")
 #: |∫K_ii dt| / ∫|K_ii| dt above which "auto" leaves B(0) free (a kernel with B(0) ≠ 0)
 DC_AUTO = 0.05
 #: the passivity grid spans [min|λ|, max|λ|] of the poles widened by this factor each way
+#: (plus ω = 0 and the two asymptotes, :func:`_asymptotes`)
 PASSIVITY_SPAN = 100.0
 #: log-spaced frequencies of the passivity grid (plus the poles' |Im λ|)
-PASSIVITY_POINTS = 400
+PASSIVITY_POINTS = 1000
 #: smallest eigenvalue of Re K̂(iω), relative to the largest, accepted as passive (round-off)
-PASSIVITY_TOL = 1e-9
-#: the enforcement asks for eigenvalues >= this margin (relative to the largest), so that the
-#: passive model keeps a little dissipation between the grid's frequencies
-PASSIVITY_MARGIN = 1e-6
+PASSIVITY_TOL = 1e-8
 #: rounds of linearised constraints in the passivity enforcement
 PASSIVITY_ITER = 20
 
@@ -527,28 +525,24 @@ def _enforce_passivity(fit: _Fit, markov: np.ndarray) -> _Fit:
     ``vᴴ Re K̂(iω; C) v ≥ 0`` (linear in C), adds it to the constraints of the earlier rounds
     and solves the constrained least squares (:func:`_lsi`). ``passivity`` is the smallest
     eigenvalue on the grid relative to the largest."""
-    omega = _passivity_grid(fit.a)
-    res = _resolvent(fit.a, fit.b, omega)
+    omega = np.concatenate([[0.0], _passivity_grid(fit.a)])
+    res = np.concatenate([_resolvent(fit.a, fit.b, omega), _asymptotes(fit)])
+    n_grid = omega.size
     p, q = fit.f.shape[1], fit.basis.shape[1]
     e, f = np.kron(np.eye(p), fit.r), fit.f.T.ravel()  # unknowns: Z row by row
     rows: list[np.ndarray] = []
-    lower: list[float] = []
     c = fit.c
-    lam, _ = _hermitian_eig(c, res)
-    target = PASSIVITY_MARGIN * max(float(lam[:, -1].max()), 1e-300)  # scaled units
     for it in range(PASSIVITY_ITER + 1):
         lam, vec = _hermitian_eig(c, res)
-        worst = float(lam[:, 0].min()) / max(float(lam[:, -1].max()), 1e-300)
+        worst = min(_relative_min(lam[:n_grid]), _relative_min(lam[n_grid:]))
         if worst >= -PASSIVITY_TOL or it == PASSIVITY_ITER:
             break
-        for w, k in zip(*np.nonzero(lam < target)):
+        for w, k in _local_minima(lam, n_grid):
             v = vec[w, :, k]
             # vᴴ Re K̂(iω; C) v is linear in C: the constraint is exact along this v
             g = (np.real(np.outer(np.conj(v), res[w] @ v)) @ fit.basis).ravel()
-            norm = max(np.linalg.norm(g), 1e-300)
-            rows.append(g / norm)
-            lower.append(target / norm)
-        x = _lsi(e, f, np.array(rows), np.array(lower))
+            rows.append(g / max(np.linalg.norm(g), 1e-300))
+        x = _lsi(e, f, np.array(rows), np.zeros(len(rows)))
         if x is None:  # infeasible with these poles: keep the last C, report the violation
             break
         c = x.reshape(p, q) @ fit.basis.T
@@ -556,6 +550,34 @@ def _enforce_passivity(fit: _Fit, markov: np.ndarray) -> _Fit:
         return replace(fit, passivity=worst)
     err = _pair_error(np.einsum("in,ntm->tim", c, fit.reg), markov)
     return replace(fit, c=c, error=err, passivity=worst)
+
+
+def _asymptotes(fit: _Fit) -> np.ndarray:
+    """"Resolvents" whose ``Re K̂`` are the asymptotes' coefficients, shape (k, n, m):
+    ``Re K̂(iω) → −C A B / ω²`` as ω → ∞ (D = 0) and, when ``K̂(0) = 0`` is imposed,
+    ``Re K̂(iω) → ω² C A⁻³ B`` as ω → 0. Their symmetric parts ⪰ 0 make the model passive
+    beyond the grid's ends too (both are linear in C, like the grid's constraints)."""
+    out = [-fit.a @ fit.b]
+    if fit.basis.shape[1] < fit.a.shape[0]:  # the K̂(0) = 0 constraint is on
+        ainv_b = np.linalg.solve(fit.a, fit.b)
+        out.append(np.linalg.solve(fit.a, np.linalg.solve(fit.a, ainv_b)))
+    return np.asarray(out, dtype=complex)
+
+
+def _local_minima(lam: np.ndarray, n_grid: int) -> list[tuple[int, int]]:
+    """(frequency, eigen-index) of the negative eigenvalues that are local minima along the
+    grid (one constraint per dip, not one per grid point), and every negative asymptote's."""
+    neg = lam < 0
+    dip = neg.copy()
+    g = lam[:n_grid]
+    dip[1:n_grid - 1] &= (g[1:-1] <= g[:-2]) & (g[1:-1] <= g[2:])
+    return list(zip(*np.nonzero(dip)))
+
+
+def _relative_min(lam: np.ndarray) -> float:
+    """Smallest eigenvalue relative to the largest magnitude (0 when all vanish)."""
+    top = float(np.abs(lam).max()) if lam.size else 0.0
+    return float(lam[:, 0].min()) / top if top > 0 else 0.0
 
 
 def _lsi(e: np.ndarray, f: np.ndarray, g: np.ndarray, h: np.ndarray) -> np.ndarray | None:
