@@ -85,7 +85,7 @@ class RadiationSS:
         Whether ``K̂(0) = 0`` was imposed.
     passivity_min : float or None
         Smallest eigenvalue of the Hermitian part of ``K̂(iω)`` over the fit's passivity grid,
-        relative to the largest, in the DOF-scaled units of the fit (>= -1e-9: passive);
+        relative to the largest, in the DOF-scaled units of the fit (>= -1e-8 (PASSIVITY_TOL): passive);
         None when passivity was not checked.
     """
 
@@ -525,7 +525,9 @@ def _enforce_passivity(fit: _Fit, markov: np.ndarray) -> _Fit:
     ``vᴴ Re K̂(iω; C) v ≥ 0`` (linear in C), adds it to the constraints of the earlier rounds
     and solves the constrained least squares (:func:`_lsi`). ``passivity`` is the smallest
     eigenvalue on the grid relative to the largest."""
-    omega = np.concatenate([[0.0], _passivity_grid(fit.a)])
+    # ω = 0 itself only when K̂(0) is free (imposed K̂(0) = 0 has nothing to constrain there)
+    zero = [0.0] if fit.basis.shape[1] == fit.a.shape[0] else []
+    omega = np.concatenate([zero, _passivity_grid(fit.a)])
     res = np.concatenate([_resolvent(fit.a, fit.b, omega), _asymptotes(fit)])
     n_grid = omega.size
     p, q = fit.f.shape[1], fit.basis.shape[1]
