@@ -172,7 +172,9 @@ def test_oblique_sea_moves_sway_roll_and_yaw(system):
 def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
     """The 6-DOF radiation model of the time domain: balanced fit (every DOF weighed alike),
     stable coupled system, B(ω) within 2 % RMS of the BEM's; A(ω) of heave and pitch within
-    0.5 %, surge within 3.5 % (the kernel's low-frequency A11 sits 1.3 % above the BEM's)."""
+    0.5 %, surge and yaw within 4 % (the kernel's low-frequency A11 sits 1.3 % above the BEM's;
+    the passive, K̂(0) = 0 fit reaches 3.7 % where the unconstrained, non-passive one had 3.4 %:
+    docs/THEORY.md, radiation state space)."""
     ss = system.radiation_ss
     assert ss.fit_error["frequency_bem"] < 0.02
     assert np.all(ss.poles.real < 0)
@@ -181,7 +183,7 @@ def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
         a = np.diag(ainf + ss.equivalent_added_mass(w))
         ref = np.diag(co.at_frequency(system.coeffs, "added_mass", w))
         assert np.abs(a / ref - 1)[[2, 4]].max() < 0.005
-        assert np.abs(a / ref - 1)[[0, 5]].max() < 0.035
+        assert np.abs(a / ref - 1)[[0, 5]].max() < 0.04
 
 
 def test_decays_follow_the_eigen_analysis(system):
