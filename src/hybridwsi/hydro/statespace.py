@@ -14,9 +14,13 @@ method) applied to the sampled kernel ``K_k = K(k Δt) = C Φ^k B`` with ``Φ = 
 3. convert to continuous time, ``A = log(Φ)/Δt`` (eigen-decomposition), reflect any pole with
    ``Re s ≥ 0`` into the left half-plane (reported as ``n_reflected``);
 4. refine ``C`` by linear least squares on every sample of K (this also repairs the small
-   misfit a reflection introduces).
+   misfit a reflection introduces), restricted to ``C A⁻¹ B = 0`` so that ``K̂(0) = B(0) = 0``
+   (``low_frequency``);
+5. make the model passive, ``Re K̂(iω) ⪰ 0`` at every ω, by the least change of ``C``
+   (residue perturbation on a grid covering the poles and both asymptotes; ``passive``).
+   docs/THEORY.md ("Radiation state space") says what is enforced and how.
 
-The order is the smallest ``n ≤ max_order`` whose relative RMS fit error in time is below
+The order is the smallest ``n ≤ max_order`` whose fit error in time (worst DOF pair) is below
 ``tol`` (or the best one, flagged ``converged=False``). The frequency response of the
 realisation is ``K̂(ω) = C (iωI − A)^{-1} B = ∫_0^∞ K(t) e^{-iωt} dt``, so
 ``Re K̂(ω) = B(ω)`` (radiation damping) and ``Im K̂(ω)/ω = A(ω) − A∞`` (Ogilvie:
