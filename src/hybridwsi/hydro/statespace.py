@@ -59,6 +59,8 @@ PASSIVITY_SPAN = 100.0
 PASSIVITY_POINTS = 1000
 #: smallest eigenvalue of Re K̂(iω), relative to the largest, accepted as passive (round-off)
 PASSIVITY_TOL = 1e-8
+#: orders made passive when none meets ``tol`` (those of smallest unconstrained error)
+PASSIVITY_TRIES = 5
 #: rounds of linearised constraints in the passivity enforcement
 PASSIVITY_ITER = 20
 
@@ -377,21 +379,11 @@ def fit_radiation_ss(
         if max_order < 1:
             raise InputError("max_order must be >= 1")
         candidates = list(range(1, max(n_max, 1) + 1))
-    best: _Fit | None = None
-    for n in candidates:
-        fit = _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency)
-        if fit is None:
-            continue  # aliased/degenerate order, or none left by the K̂(0) = 0 constraint
-        if passive and (fit.error < tol or order is not None):
-            fit = _enforce_passivity(fit, markov)
-        if best is None or fit.error < best.error:
-            best = fit
-        if fit.error < tol:
-            break
+    fit_n = lambda n: _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov,  # noqa: E731
+                                 low_frequency)
+    best = _select_order(fit_n, candidates, tol, markov, passive, fixed=order is not None)
     if best is None:
         raise InputError("no stable state-space realisation found for K; check the kernel")
-    if passive and best.passivity is None:  # no order met tol: the best one, made passive
-        best = _enforce_passivity(best, markov)
     err = best.error
     ss = RadiationSS(A=best.a, B=best.b * s_rad[None], C=s_inf[:, None] * best.c,
                      D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
@@ -405,6 +397,36 @@ def fit_radiation_ss(
         warnings.warn(f"radiation state space: passivity not reached (smallest relative "
                       f"eigenvalue of Re K̂(iω) {best.passivity:.3g})", stacklevel=2)
     return ss
+
+
+def _select_order(fit_n, candidates: list[int], tol: float, markov: np.ndarray,
+                  passive: bool, fixed: bool) -> _Fit | None:
+    """The smallest order whose fit, made passive, has an error below ``tol``; when none has,
+    the best passive one among the ``PASSIVITY_TRIES`` orders of smallest unconstrained error
+    (the enforcement may fail for one set of poles and succeed for the next)."""
+    best: _Fit | None = None
+    pending: list[tuple[float, int]] = []  # (unconstrained error, order) of the misses
+    for n in candidates:
+        fit = fit_n(n)
+        if fit is None:
+            continue  # aliased/degenerate order, or none left by the K̂(0) = 0 constraint
+        if fit.error >= tol and not fixed:
+            pending.append((fit.error, n))
+            continue
+        fit = _enforce_passivity(fit, markov) if passive else fit
+        best = fit if best is None or _rank(fit) < _rank(best) else best
+        if (fit.error < tol or fixed) and _rank(fit)[0] == 0:
+            return fit
+    for _, n in sorted(pending)[:PASSIVITY_TRIES]:
+        fit = fit_n(n)
+        fit = _enforce_passivity(fit, markov) if passive else fit
+        best = fit if best is None or _rank(fit) < _rank(best) else best
+    return best
+
+
+def _rank(fit: _Fit) -> tuple[int, float]:
+    """Passive (or not checked) fits first, then by fit error."""
+    return (int(fit.passivity is not None and fit.passivity < -PASSIVITY_TOL), fit.error)
 
 
 @dataclass
