@@ -178,6 +178,14 @@ def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
     ss = system.radiation_ss
     assert ss.fit_error["frequency_bem"] < 0.02
     assert np.all(ss.poles.real < 0)
+    # passive (the radiation force absorbs energy at every ω) on a grid of the test's own,
+    # through every pole's resonance, and no damping at ω = 0
+    omega = np.unique(np.concatenate([np.geomspace(1e-5, 1e3, 4000), np.abs(ss.poles.imag)]))
+    assert ss.passivity(omega).min() >= -1e-6
+    b_peak = np.diag(co.matrix_omega(system.coeffs, "radiation_damping", ss.radiating_dof
+                                     ).max(axis=0))
+    k0 = np.real(ss.frequency_response([0.0])[0])
+    assert np.all(np.abs(k0) <= 1e-9 * np.sqrt(np.outer(b_peak, b_peak)))
     ainf = co.matrix(system.coeffs, "added_mass_inf")
     for w in np.linspace(0.3, 1.3, 21):
         a = np.diag(ainf + ss.equivalent_added_mass(w))
