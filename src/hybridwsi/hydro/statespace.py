@@ -296,6 +296,7 @@ def fit_radiation_ss(
     balance: bool | None = None,
     low_frequency: str = "auto",
     passive: bool = True,
+    max_pole: float | None = None,
 ) -> RadiationSS:
     """Realise the radiation kernel K(t) as a stable, passive continuous state-space model.
 
@@ -336,6 +337,10 @@ def fit_radiation_ss(
     passive : bool
         Enforce passivity, ``Re K̂(iω)`` (its Hermitian part) positive semi-definite at every
         ω, by a least perturbation of ``C`` (module docstring).
+    max_pole : float, optional
+        Largest pole magnitude ``|λ|`` [1/s] accepted: orders with a faster pole are skipped
+        (an explicit integrator with step Δt needs ``|λ| Δt`` ≲ 2, RK4; ``cummins`` passes
+        ``2/Δt`` when it fits the model itself).
 
     Returns
     -------
@@ -379,8 +384,12 @@ def fit_radiation_ss(
         if max_order < 1:
             raise InputError("max_order must be >= 1")
         candidates = list(range(1, max(n_max, 1) + 1))
-    fit_n = lambda n: _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov,  # noqa: E731
-                                 low_frequency)
+    def fit_n(n: int) -> _Fit | None:
+        fit = _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency)
+        too_fast = max_pole is not None and fit is not None and \
+            np.abs(np.linalg.eigvals(fit.a)).max() > max_pole
+        return None if too_fast else fit
+
     best = _select_order(fit_n, candidates, tol, markov, passive, fixed=order is not None)
     if best is None:
         raise InputError("no stable state-space realisation found for K; check the kernel")
