@@ -1,4 +1,4 @@
-"""Radiation state-space fits of the shipped bodies: order, B(ω) error, B11 at 0.05 rad/s, K̂(0), passivity.
+"""Radiation state-space fits of the shipped bodies: B(ω) error, B11(0.05 rad/s), K̂(0), passivity.
 
 For each shipped coefficient file (paper sphere, OC3-Hywind, OC4 semi) the kernel K(t) is
 computed from B(ω) (:func:`hybridwsi.hydro.irf.radiation_irf`) and fitted with the settings its

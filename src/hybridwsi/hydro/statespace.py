@@ -91,7 +91,7 @@ class RadiationSS:
         Whether ``K̂(0) = 0`` was imposed.
     passivity_min : float or None
         Smallest eigenvalue of the Hermitian part of ``K̂(iω)`` over the fit's passivity grid,
-        relative to the largest, in the DOF-scaled units of the fit (>= -1e-8 (PASSIVITY_TOL): passive);
+        relative to the largest, in the DOF-scaled units of the fit (passive: >= -PASSIVITY_TOL);
         None when passivity was not checked.
     """
 
