@@ -201,7 +201,11 @@ def _decay_zeta(oc3, rotor, dof: str, aperiodic: int = 0) -> tuple[float, np.nda
     stiffness = co.matrix(coeffs, "hydrostatic_stiffness", DOFS3) + k
     z_eq = np.linalg.solve(stiffness, rotor.mean_force())
     kick = {"Surge": [5.0, 0.0, 0.0], "Pitch": [0.0, 0.0, 0.02]}[dof]
-    duration, modes = {"Surge": (900.0, [0.0507, 0.212]), "Pitch": (300.0, [0.212, 0.0507])}[dof]
+    # Pitch: + a mode near 0.3 rad/s: the passive radiation state space's memory modes (coupled
+    # eigenvalues −0.22 ± 0.30i, −0.20 ± 0.34i 1/s, ζ 0.5–0.6) show in the pitch decay under the
+    # operating rotor's heavy damping (2.5 % RMS misfit of a two-mode fit; 0.1 % with it)
+    duration, modes = {"Surge": (900.0, [0.0507, 0.212]),
+                       "Pitch": (300.0, [0.212, 0.0507, 0.3])}[dof]
     forces = [Hydrostatic(k), additional_damping(case, DOFS3), rotor]
     hist = simulate(coeffs, dofs=DOFS3, duration=duration, dt=0.25, z0=z_eq + kick,
                     forces=forces, radiation_ss=ss)
@@ -221,7 +225,7 @@ def test_decays_damped_by_what_the_thrust_slope_predicts(oc3, table, wind_speed)
     one: the change of the damping ratio equals the closed-form prediction — the complex modes
     of the linear model with the aerodynamic damping dT/dU j jᵀ added (A, B at each mode's
     frequency) — within 10 % (+0.002). At 8 m/s the operating rotor damps surge and pitch
-    more (ζ surge 5.1 → 10.9 %, pitch 3.4 → 23 %); at 18 m/s less (negative dT/dU)."""
+    more (ζ surge 6.1 → 11.9 %, pitch 4.1 → 24 %); at 18 m/s less (negative dT/dU)."""
     parked = OperatingRotor(table, SteadyWind(wind_speed), HUB, DOFS3, shaft_tilt=TILT)
     damping = parked.linear_coefficients(3)[1]
     pred_parked, pred_op = _predicted_zeta(oc3, 0.0 * damping), _predicted_zeta(oc3, damping)

@@ -121,7 +121,7 @@ def build_system(
     if radiation == "statespace":
         if radiation_ss is None:
             k = _kernel(coeffs, dofs, irf, irf_t_max, dt=None)
-            radiation_ss = fit_radiation_ss(k, order=ss_order, tol=ss_tol, coeffs=coeffs)
+            radiation_ss = _fit_for_step(k, ss_order, ss_tol, coeffs, dt)
         if radiation_ss.radiating_dof != dofs or radiation_ss.influenced_dof != dofs:
             raise InputError(f"radiation_ss is for DOFs {radiation_ss.radiating_dof}, not {dofs}")
         sys.ss = radiation_ss
@@ -161,3 +161,14 @@ def _kernel_on_grid(k: xr.DataArray, dt: float) -> np.ndarray:
         for i in range(vals.shape[2]):
             out[:, i, j] = np.interp(tk, t, vals[:, j, i])
     return out
+
+
+def _fit_for_step(k, order: int | None, tol: float, coeffs: xr.Dataset, dt: float
+                  ) -> RadiationSS:
+    """The state-space fit with no pole faster than the RK4 step resolves (``|λ| dt ≤ 2``);
+    when no order satisfies that, the unrestricted fit (a smaller ``dt`` may then be needed)."""
+    try:
+        return fit_radiation_ss(k, order=order, tol=tol, coeffs=coeffs, max_pole=2.0 / dt)
+    except InputError:
+        return fit_radiation_ss(k, order=order, tol=tol, coeffs=coeffs)
+

@@ -14,9 +14,13 @@ method) applied to the sampled kernel ``K_k = K(k Δt) = C Φ^k B`` with ``Φ = 
 3. convert to continuous time, ``A = log(Φ)/Δt`` (eigen-decomposition), reflect any pole with
    ``Re s ≥ 0`` into the left half-plane (reported as ``n_reflected``);
 4. refine ``C`` by linear least squares on every sample of K (this also repairs the small
-   misfit a reflection introduces).
+   misfit a reflection introduces), restricted to ``C A⁻¹ B = 0`` so that ``K̂(0) = B(0) = 0``
+   (``low_frequency``);
+5. make the model passive, ``Re K̂(iω) ⪰ 0`` at every ω, by the least change of ``C``
+   (residue perturbation on a grid covering the poles and both asymptotes; ``passive``).
+   docs/THEORY.md ("Radiation state space") says what is enforced and how.
 
-The order is the smallest ``n ≤ max_order`` whose relative RMS fit error in time is below
+The order is the smallest ``n ≤ max_order`` whose fit error in time (worst DOF pair) is below
 ``tol`` (or the best one, flagged ``converged=False``). The frequency response of the
 realisation is ``K̂(ω) = C (iωI − A)^{-1} B = ∫_0^∞ K(t) e^{-iωt} dt``, so
 ``Re K̂(ω) = B(ω)`` (radiation damping) and ``Im K̂(ω)/ω = A(ω) − A∞`` (Ogilvie:
@@ -32,17 +36,33 @@ one stacked realisation.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 import xarray as xr
 
 from hybridwsi.errors import InputError
 
 #: largest Hankel block dimension (block rows = block columns); K is decimated to fit
 MAX_HANKEL = 120
+#: low-frequency treatments of :func:`fit_radiation_ss`
+LOW_FREQUENCY = ("auto", "zero", "free")
+#: |∫K_ii dt| / ∫|K_ii| dt above which "auto" leaves B(0) free (a kernel with B(0) ≠ 0)
+DC_AUTO = 0.05
+#: the passivity grid spans [min|λ|, max|λ|] of the poles widened by this factor each way
+#: (plus ω = 0 and the two asymptotes, :func:`_asymptotes`)
+PASSIVITY_SPAN = 100.0
+#: log-spaced frequencies of the passivity grid (plus the poles' |Im λ|)
+PASSIVITY_POINTS = 1000
+#: smallest eigenvalue of Re K̂(iω), relative to the largest, accepted as passive (round-off)
+PASSIVITY_TOL = 1e-8
+#: orders made passive when none meets ``tol`` (those of smallest unconstrained error)
+PASSIVITY_TRIES = 5
+#: rounds of linearised constraints in the passivity enforcement
+PASSIVITY_ITER = 20
 
 
 @dataclass
@@ -57,13 +77,22 @@ class RadiationSS:
     radiating_dof, influenced_dof : list of str
         DOF names of the inputs (velocities) and outputs (forces).
     fit_error : dict
-        ``time``: relative RMS error of the impulse response on the fitted samples;
+        ``time``: the impulse response's RMS error on the fitted samples, worst DOF pair,
+        relative to the geometric mean RMS of the pair's diagonal kernels;
         ``frequency``: relative RMS error of ``Re K̂(ω)`` against the cosine transform of the
         sampled K (and ``frequency_bem`` against the coefficients' B(ω) when given).
     n_reflected : int
         Number of unstable identified poles reflected into the left half-plane.
     converged : bool
         False when no order up to ``max_order`` met ``tol``.
+    dt_fit : float
+        Sampling step [s] of the Hankel matrices.
+    low_frequency : {"zero", "free"}
+        Whether ``K̂(0) = 0`` was imposed.
+    passivity_min : float or None
+        Smallest eigenvalue of the Hermitian part of ``K̂(iω)`` over the fit's passivity grid,
+        relative to the largest, in the DOF-scaled units of the fit (passive: >= -PASSIVITY_TOL);
+        None when passivity was not checked.
     """
 
     A: np.ndarray
@@ -76,6 +105,8 @@ class RadiationSS:
     n_reflected: int = 0
     converged: bool = True
     dt_fit: float = float("nan")
+    low_frequency: str = "free"
+    passivity_min: float | None = None
 
     @property
     def order(self) -> int:
@@ -125,6 +156,23 @@ class RadiationSS:
             raise InputError("equivalent_added_mass needs omega > 0")
         return np.imag(self.frequency_response([omega])[0]).T / omega
 
+    def passivity(self, omega: np.ndarray) -> np.ndarray:
+        """Smallest eigenvalue of the Hermitian part of ``S⁻¹ K̂(iω) S⁻¹`` at each ω [rad/s].
+
+        ``S = diag(√b_i)`` with ``b_i`` the largest ``Re K̂_ii`` over ``omega``: a
+        dimensionless index, comparable across DOFs in m and rad, negative where the model
+        generates energy (a passive radiation force absorbs it at every ω). Needs as many
+        radiating as influenced DOFs.
+        """
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        h = self.frequency_response(omega)  # (nω, n_rad, n_inf)
+        if h.shape[1] != h.shape[2]:
+            raise InputError("passivity needs as many radiating as influenced DOFs")
+        peak = np.real(np.einsum("wii->wi", h)).max(axis=0)
+        inv = 1.0 / np.sqrt(np.where(peak > 0, peak, 1.0))
+        g = h * np.outer(inv, inv)[None]
+        return np.linalg.eigvalsh(0.5 * (g + np.conj(g.transpose(0, 2, 1))))[:, 0]
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-serialisable description (matrices as nested lists)."""
         return {
@@ -139,6 +187,8 @@ class RadiationSS:
             "n_reflected": self.n_reflected,
             "converged": self.converged,
             "dt_fit": self.dt_fit,
+            "low_frequency": self.low_frequency,
+            "passivity_min": self.passivity_min,
         }
 
     @classmethod
@@ -153,7 +203,8 @@ class RadiationSS:
         return cls(**arr, radiating_dof=list(d["radiating_dof"]),
                    influenced_dof=list(d["influenced_dof"]), fit_error=dict(d["fit_error"]),
                    n_reflected=int(d["n_reflected"]), converged=bool(d["converged"]),
-                   dt_fit=float(d["dt_fit"]))
+                   dt_fit=float(d["dt_fit"]), low_frequency=str(d.get("low_frequency", "free")),
+                   passivity_min=d.get("passivity_min"))
 
 
 # --------------------------------------------------------------------------- input handling
@@ -221,19 +272,6 @@ def _to_continuous(phi: np.ndarray, dt: float) -> tuple[np.ndarray, int]:
     return np.real(a), int(bad.sum())
 
 
-def _refit_c(a: np.ndarray, b: np.ndarray, t: np.ndarray, markov: np.ndarray) -> np.ndarray:
-    """Least-squares ``C`` so that ``C e^{A t_k} B ≈ K_k`` on all samples."""
-    lam, vec = np.linalg.eig(a)
-    vb = np.linalg.solve(vec, b)  # (n, m)
-    # regressor e^{A t_k} B = V diag(e^{λ t_k}) V^{-1} B, stacked over k as columns
-    reg = np.real(np.einsum("nq,kq,qm->nkm", vec, np.exp(np.outer(t, lam)), vb))
-    n, nk, m = reg.shape
-    lhs = reg.reshape(n, nk * m)  # C @ lhs = rhs
-    rhs = markov.transpose(1, 0, 2).reshape(markov.shape[1], nk * m)
-    c, *_ = np.linalg.lstsq(lhs.T, rhs.T, rcond=None)
-    return c.T
-
-
 def _cosine_transform(k: np.ndarray, dt: float, omega: np.ndarray) -> np.ndarray:
     """``∫_0^T K(t) cos ωt dt`` by the trapezoid rule, shape (nω, n_rad, n_inf)."""
     t = np.arange(k.shape[0]) * dt
@@ -255,9 +293,12 @@ def fit_radiation_ss(
     method: str = "hankel",
     dt: float | None = None,
     coeffs: xr.Dataset | None = None,
-    balance: bool = False,
+    balance: bool | None = None,
+    low_frequency: str = "auto",
+    passive: bool = True,
+    max_pole: float | None = None,
 ) -> RadiationSS:
-    """Realise the radiation kernel K(t) as a stable continuous state-space model.
+    """Realise the radiation kernel K(t) as a stable, passive continuous state-space model.
 
     Parameters
     ----------
@@ -269,7 +310,8 @@ def fit_radiation_ss(
     max_order : int
         Largest order tried by the automatic selection.
     tol : float
-        Target relative RMS error of the impulse response (0.01 = 1 %).
+        Target fit error of the impulse response (0.01 = 1 %): the worst DOF pair's RMS error
+        relative to the geometric mean of its two diagonal kernels' RMS (module docstring).
     method : {"hankel"}
         Only ERA/Hankel-SVD is implemented.
     dt : float, optional
@@ -277,12 +319,28 @@ def fit_radiation_ss(
     coeffs : xarray.Dataset, optional
         BEM coefficients; when given, ``fit_error["frequency_bem"]`` compares ``Re K̂(ω)``
         with their ``radiation_damping`` B(ω).
-    balance : bool
+    balance : bool, optional
         Fit ``K_ij / (s_i s_j)`` with ``s_i = sqrt(max_t |K_ii|)`` (every diagonal kernel of
         peak 1) and scale the realisation back (``B`` by ``s_rad``, ``C`` by ``s_inf``): the
         joint fit then weighs every DOF alike instead of the largest entries (N m s/rad of a
-        rotation against N s/m of a translation), and the order selection and ``tol`` refer to
-        the balanced kernel. Needs the same DOFs radiating and influenced.
+        rotation against N s/m of a translation). A congruence, so passivity is unchanged.
+        ``None`` (default): balance whenever the same DOFs radiate and are influenced;
+        ``True`` requires that; ``False`` fits K in SI units.
+    low_frequency : {"auto", "zero", "free"}
+        ``"zero"`` imposes ``K̂(0) = B(0) = 0`` exactly (a radiation kernel: the damping of a
+        floating body vanishes at zero frequency); ``"free"`` leaves ``K̂(0)`` to the fit
+        (a kernel with ``∫K dt ≠ 0``, e.g. a closed form that is not a radiation kernel);
+        ``"auto"``: ``"zero"`` unless the kernel's own ``|∫K_ii dt|`` exceeds ``DC_AUTO`` (5 %)
+        of ``∫|K_ii| dt`` for some DOF (``radiation_irf`` kernels are at most 4 % for the
+        shipped bodies, the truncation; B sampled from a nonzero B(0) gives more). The choice
+        is recorded in ``RadiationSS.low_frequency``.
+    passive : bool
+        Enforce passivity, ``Re K̂(iω)`` (its Hermitian part) positive semi-definite at every
+        ω, by a least perturbation of ``C`` (module docstring).
+    max_pole : float, optional
+        Largest pole magnitude ``|λ|`` [1/s] accepted: orders with a faster pole are skipped
+        (an explicit integrator with step Δt needs ``|λ| Δt`` ≲ 2, RK4; ``cummins`` passes
+        ``2/Δt`` when it fits the model itself).
 
     Returns
     -------
@@ -292,9 +350,19 @@ def fit_radiation_ss(
         raise InputError(f"unknown state-space fitting method '{method}' (use 'hankel')")
     if not 0 < tol < 1:
         raise InputError(f"tol must be in (0, 1), got {tol}")
+    if low_frequency not in LOW_FREQUENCY:
+        raise InputError(f"low_frequency must be one of {', '.join(LOW_FREQUENCY)}, "
+                         f"got {low_frequency!r}")
     arr, dt0, rad, inf = _kernel_array(K, dt)
-    scale = _balance_scale(arr, rad, inf) if balance else np.ones(arr.shape[1])
-    markov = (arr / np.outer(scale, scale)).transpose(0, 2, 1)  # (nt, p=n_inf, m=n_rad)
+    dc = _dc_ratio(arr, dt0)
+    if low_frequency == "auto":
+        low_frequency = "zero" if dc <= DC_AUTO else "free"
+    elif low_frequency == "zero" and dc > DC_AUTO:
+        warnings.warn(f"radiation state space: the kernel has ∫K dt = B(0) ≠ 0 ({dc:.0%} of "
+                      "∫|K| dt) but low_frequency='zero' imposes B(0) = 0", stacklevel=2)
+    s_rad, s_inf = _dof_scales(arr, rad, inf, balance)
+    # scaled Markov parameters (output force, input velocity): every DOF pair weighs alike
+    markov = (arr / np.outer(s_rad, s_inf)[None]).transpose(0, 2, 1)
     nt, p, m = markov.shape
     t_all = np.arange(nt) * dt0
     # decimate so that the Hankel matrix spans the whole kernel with at most MAX_HANKEL blocks
@@ -316,53 +384,260 @@ def fit_radiation_ss(
         if max_order < 1:
             raise InputError("max_order must be >= 1")
         candidates = list(range(1, max(n_max, 1) + 1))
-    best: tuple[float, Any] | None = None
-    for n in candidates:
-        try:
-            fit = _era_order(u, sv, vt, h1, n, p, m, dth, t_all, markov)
-        except InputError:
-            continue  # aliased/degenerate order: try the next one
-        err = _rel_rms(_impulse_markov(fit, t_all), markov)
-        if best is None or err < best[0]:
-            best = (err, fit)
-        if err < tol:
-            break
+    def fit_n(n: int) -> _Fit | None:
+        fit = _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency)
+        too_fast = max_pole is not None and fit is not None and \
+            np.abs(np.linalg.eigvals(fit.a)).max() > max_pole
+        return None if too_fast else fit
+
+    best = _select_order(fit_n, candidates, tol, markov, passive, fixed=order is not None)
     if best is None:
         raise InputError("no stable state-space realisation found for K; check the kernel")
-    err, (a, b, c, n_ref) = best
-    b, c = b * scale[None, :], scale[:, None] * c  # back to the kernel's units
-    ss = RadiationSS(A=a, B=b, C=c, D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
-                     n_reflected=n_ref, converged=err < tol or order is not None, dt_fit=dth)
+    err = best.error
+    ss = RadiationSS(A=best.a, B=best.b * s_rad[None], C=s_inf[:, None] * best.c,
+                     D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
+                     n_reflected=best.n_reflected, converged=err < tol or order is not None,
+                     dt_fit=dth, low_frequency=low_frequency, passivity_min=best.passivity)
     ss.fit_error = _fit_errors(ss, arr, dt0, err, coeffs)
     if not ss.converged:
         warnings.warn(f"radiation state space: order {ss.order} reaches a fit error of "
                       f"{err:.3g} > tol={tol}", stacklevel=2)
+    if passive and best.passivity < -PASSIVITY_TOL:
+        warnings.warn(f"radiation state space: passivity not reached (smallest relative "
+                      f"eigenvalue of Re K̂(iω) {best.passivity:.3g})", stacklevel=2)
     return ss
 
 
-def _balance_scale(arr: np.ndarray, rad: list[str], inf: list[str]) -> np.ndarray:
-    """``sqrt(max_t |K_ii(t)|)`` per DOF (1 for a DOF whose kernel vanishes)."""
-    if list(rad) != list(inf):
+def _select_order(fit_n, candidates: list[int], tol: float, markov: np.ndarray,
+                  passive: bool, fixed: bool) -> _Fit | None:
+    """The smallest order whose fit, made passive, has an error below ``tol``; when none has,
+    the best passive one among the ``PASSIVITY_TRIES`` orders of smallest unconstrained error
+    (the enforcement may fail for one set of poles and succeed for the next)."""
+    best: _Fit | None = None
+    pending: list[tuple[float, int]] = []  # (unconstrained error, order) of the misses
+    for n in candidates:
+        fit = fit_n(n)
+        if fit is None:
+            continue  # aliased/degenerate order, or none left by the K̂(0) = 0 constraint
+        if fit.error >= tol and not fixed:
+            pending.append((fit.error, n))
+            continue
+        fit = _enforce_passivity(fit, markov) if passive else fit
+        best = fit if best is None or _rank(fit) < _rank(best) else best
+        if (fit.error < tol or fixed) and _rank(fit)[0] == 0:
+            return fit
+    for _, n in sorted(pending)[:PASSIVITY_TRIES]:
+        fit = fit_n(n)
+        fit = _enforce_passivity(fit, markov) if passive else fit
+        best = fit if best is None or _rank(fit) < _rank(best) else best
+    return best
+
+
+def _rank(fit: _Fit) -> tuple[int, float]:
+    """Passive (or not checked) fits first, then by fit error."""
+    return (int(fit.passivity is not None and fit.passivity < -PASSIVITY_TOL), fit.error)
+
+
+@dataclass
+class _Fit:
+    """One order's realisation in scaled units, with the least-squares problem for ``C``:
+    ``C = Z Pᵀ`` and ``‖R z_i − f_i‖`` per output row i (QR-reduced)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    n_reflected: int
+    error: float
+    basis: np.ndarray  # P (n, q): the rows of C allowed by the K̂(0) constraint
+    r: np.ndarray  # (q, q)
+    f: np.ndarray  # (q, p)
+    reg: np.ndarray  # (n, nt, m): e^{A t_k} B, the impulse response is C times it
+    passivity: float | None = None
+
+
+def _dof_scales(arr: np.ndarray, rad: list[str], inf: list[str], balance: bool | None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Per-DOF scales ``s_i = √max|K_ii|`` [√(kg/s²) or per rad] of the inputs and outputs.
+
+    The fit works on ``K_ij / (s_i s_j)``, a congruence that leaves passivity unchanged and
+    makes every diagonal kernel of size 1: in SI units a spar's pitch kernel is ~10⁴ times
+    its surge kernel and would otherwise decide the fit alone."""
+    if balance and list(rad) != list(inf):
         raise InputError("balance needs the same radiating and influenced DOFs")
-    peak = np.abs(np.diagonal(arr, axis1=1, axis2=2)).max(axis=0)
-    return np.sqrt(np.where(peak > 0, peak, 1.0))
+    if balance is False or list(rad) != list(inf):
+        return np.ones(len(rad)), np.ones(len(inf))
+    peak = np.abs(np.einsum("tii->ti", arr)).max(axis=0)
+    peak = np.where(peak > 0, peak, np.abs(arr).max())
+    return np.sqrt(peak), np.sqrt(peak)
 
 
-def _era_order(u, sv, vt, h1, n, p, m, dth, t_all, markov):
-    """ERA realisation of order n, continuous and stable, with C refitted on all samples."""
+def _dc_ratio(arr: np.ndarray, dt: float) -> float:
+    """Largest ``|∫K_ii dt| / ∫|K_ii| dt`` over the diagonal kernels (all pairs when the kernel
+    is not square): how far the sampled kernel's own ``B(0)`` is from zero."""
+    dc = np.abs(np.trapezoid(arr, dx=dt, axis=0))
+    size = np.trapezoid(np.abs(arr), dx=dt, axis=0)
+    ratio = dc / np.where(size > 0, size, np.inf)
+    return float(np.max(np.diagonal(ratio) if ratio.shape[0] == ratio.shape[1] else ratio))
+
+
+def _pair_error(est: np.ndarray, ref: np.ndarray) -> float:
+    """Worst DOF pair's RMS error of ``est`` (nt, p, m) against ``ref``, relative to the
+    geometric mean RMS of the pair's two diagonal kernels (the global relative error when
+    the kernel is not square or a diagonal is zero)."""
+    p, m = ref.shape[1:]
+    rms = np.sqrt(np.mean(ref**2, axis=0))
+    err = np.sqrt(np.mean((est - ref) ** 2, axis=0))
+    diag = np.diagonal(rms) if p == m else np.zeros(0)
+    if p != m or np.any(diag <= 0):
+        return _rel_rms(est, ref)
+    return float(np.max(err / np.sqrt(np.outer(diag, diag))))
+
+
+def _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency) -> _Fit | None:
+    """ERA realisation of order n, continuous and stable; ``C`` by least squares on all
+    samples of K, constrained to ``K̂(0) = −C A⁻¹ B = 0`` when ``low_frequency="zero"``."""
     s_half = np.sqrt(sv[:n])
     phi = (u[:, :n].T @ h1 @ vt[:n].T) / np.outer(s_half, s_half)
     b = (s_half[:, None] * vt[:n])[:, :m]
-    a, n_ref = _to_continuous(phi, dth)
-    c = _refit_c(a, b, t_all, markov)
-    return a, b, c, n_ref
+    try:
+        a, n_ref = _to_continuous(phi, dth)
+    except InputError:
+        return None
+    reg = _regressor(a, b, t_all)  # (n, nt, m): e^{A t_k} B
+    if low_frequency == "zero":
+        basis = scipy.linalg.null_space(np.linalg.solve(a, b).T)  # rows c with c A⁻¹B = 0
+        if basis.shape[1] == 0:
+            return None
+    else:
+        basis = np.eye(n)
+    nt, p, _ = markov.shape
+    lhs = (basis.T @ reg.reshape(n, nt * m)).T  # (nt m, q): Z Pᵀ reg = K
+    rhs = markov.transpose(1, 0, 2).reshape(p, nt * m).T
+    q_mat, r = np.linalg.qr(lhs)
+    f = q_mat.T @ rhs
+    z = np.linalg.lstsq(r, f, rcond=None)[0].T
+    c = z @ basis.T
+    err = _pair_error(np.einsum("in,ntm->tim", c, reg), markov)
+    return _Fit(a, b, c, n_ref, err, basis, r, f, reg)
 
 
-def _impulse_markov(fit, t: np.ndarray) -> np.ndarray:
-    a, b, c, _ = fit
+def _regressor(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``e^{A t_k} B`` for every sample time, shape (n, nt, m) (C times it is the kernel)."""
     lam, vec = np.linalg.eig(a)
-    return np.real(np.einsum("in,tn,nj->tij", c @ vec, np.exp(np.outer(t, lam)),
-                             np.linalg.solve(vec, b)))
+    vb = np.linalg.solve(vec, b)  # (n, m)
+    return np.real(np.einsum("nq,kq,qm->nkm", vec, np.exp(np.outer(t, lam)), vb))
+
+
+def _resolvent(a: np.ndarray, b: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``(iωI − A)⁻¹ B`` at each ω [rad/s], shape (nω, n, m), by the eigen-decomposition of A."""
+    lam, vec = np.linalg.eig(a)
+    vb = np.linalg.solve(vec, b)
+    return np.einsum("nk,wk,km->wnm", vec, 1.0 / (1j * omega[:, None] - lam[None]), vb)
+
+
+def _passivity_grid(a: np.ndarray) -> np.ndarray:
+    """Frequencies [rad/s] of the passivity check: log-spaced from ``min|λ|/PASSIVITY_SPAN``
+    to ``max|λ| · PASSIVITY_SPAN`` (beyond them ``Re K̂`` follows its ω² and ω⁻² asymptotes,
+    whose signs the end points show), plus every pole's ``|Im λ|`` (where dips are sharpest)."""
+    lam = np.linalg.eigvals(a)
+    mag = np.abs(lam)
+    grid = np.geomspace(mag.min() / PASSIVITY_SPAN, mag.max() * PASSIVITY_SPAN, PASSIVITY_POINTS)
+    return np.unique(np.concatenate([grid, np.abs(lam.imag[lam.imag > 0])]))
+
+
+def _hermitian_eig(c: np.ndarray, res: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenpairs of the Hermitian part of ``K̂(iω) = C (iωI − A)⁻¹ B`` at each ω."""
+    h = np.einsum("in,wnm->wim", c, res)
+    return np.linalg.eigh(0.5 * (h + np.conj(h.transpose(0, 2, 1))))
+
+
+def _enforce_passivity(fit: _Fit, markov: np.ndarray) -> _Fit:
+    """The least change of ``C`` (in the fit's least-squares sense) that makes the Hermitian
+    part of ``K̂(iω)`` positive semi-definite on the passivity grid.
+
+    Residue perturbation (Gustavsen & Semlyen 2001, IEEE Trans. Power Syst. 16(1) 97–104):
+    the poles (A, B) stay; each round linearises every negative eigenvalue at its eigenvector,
+    ``vᴴ Re K̂(iω; C) v ≥ 0`` (linear in C), adds it to the constraints of the earlier rounds
+    and solves the constrained least squares (:func:`_lsi`). ``passivity`` is the smallest
+    eigenvalue on the grid relative to the largest."""
+    # ω = 0 itself only when K̂(0) is free (imposed K̂(0) = 0 has nothing to constrain there)
+    zero = [0.0] if fit.basis.shape[1] == fit.a.shape[0] else []
+    omega = np.concatenate([zero, _passivity_grid(fit.a)])
+    res = np.concatenate([_resolvent(fit.a, fit.b, omega), _asymptotes(fit)])
+    n_grid = omega.size
+    p, q = fit.f.shape[1], fit.basis.shape[1]
+    e, f = np.kron(np.eye(p), fit.r), fit.f.T.ravel()  # unknowns: Z row by row
+    rows: list[np.ndarray] = []
+    c = fit.c
+    for it in range(PASSIVITY_ITER + 1):
+        lam, vec = _hermitian_eig(c, res)
+        worst = min(_relative_min(lam[:n_grid]), _relative_min(lam[n_grid:]))
+        if worst >= -PASSIVITY_TOL or it == PASSIVITY_ITER:
+            break
+        for w, k in _local_minima(lam, n_grid):
+            v = vec[w, :, k]
+            # vᴴ Re K̂(iω; C) v is linear in C: the constraint is exact along this v
+            g = (np.real(np.outer(np.conj(v), res[w] @ v)) @ fit.basis).ravel()
+            rows.append(g / max(np.linalg.norm(g), 1e-300))
+        x = _lsi(e, f, np.array(rows), np.zeros(len(rows)))
+        if x is None:  # infeasible with these poles: keep the last C, report the violation
+            break
+        c = x.reshape(p, q) @ fit.basis.T
+    if c is fit.c:
+        return replace(fit, passivity=worst)
+    err = _pair_error(np.einsum("in,ntm->tim", c, fit.reg), markov)
+    return replace(fit, c=c, error=err, passivity=worst)
+
+
+def _asymptotes(fit: _Fit) -> np.ndarray:
+    """"Resolvents" whose ``Re K̂`` are the asymptotes' coefficients, shape (k, n, m):
+    ``Re K̂(iω) → −C A B / ω²`` as ω → ∞ (D = 0) and, when ``K̂(0) = 0`` is imposed,
+    ``Re K̂(iω) → ω² C A⁻³ B`` as ω → 0. Their symmetric parts ⪰ 0 make the model passive
+    beyond the grid's ends too (both are linear in C, like the grid's constraints)."""
+    out = [-fit.a @ fit.b]
+    if fit.basis.shape[1] < fit.a.shape[0]:  # the K̂(0) = 0 constraint is on
+        ainv_b = np.linalg.solve(fit.a, fit.b)
+        out.append(np.linalg.solve(fit.a, np.linalg.solve(fit.a, ainv_b)))
+    return np.asarray(out, dtype=complex)
+
+
+def _local_minima(lam: np.ndarray, n_grid: int) -> list[tuple[int, int]]:
+    """(frequency, eigen-index) of the negative eigenvalues that are local minima along the
+    grid (one constraint per dip, not one per grid point), and every negative asymptote's."""
+    neg = lam < 0
+    dip = neg.copy()
+    g = lam[:n_grid]
+    dip[1:n_grid - 1] &= (g[1:-1] <= g[:-2]) & (g[1:-1] <= g[2:])
+    return list(zip(*np.nonzero(dip)))
+
+
+def _relative_min(lam: np.ndarray) -> float:
+    """Smallest eigenvalue relative to the largest magnitude (0 when all vanish)."""
+    top = float(np.abs(lam).max()) if lam.size else 0.0
+    return float(lam[:, 0].min()) / top if top > 0 else 0.0
+
+
+def _lsi(e: np.ndarray, f: np.ndarray, g: np.ndarray, h: np.ndarray) -> np.ndarray | None:
+    """``min ‖e x − f‖`` subject to ``g x ≥ h``; None when infeasible.
+
+    Lawson & Hanson (1974), *Solving Least Squares Problems*, Ch. 23: with ``e = U S Vᵀ`` and
+    ``y = S Vᵀ x − Uᵀ f`` the problem is the least-distance programme ``min ‖y‖, G̃ y ≥ h̃``,
+    whose solution is the residual of a non-negative least squares (:func:`scipy.optimize.nnls`).
+    """
+    u, s, vt = np.linalg.svd(e, full_matrices=False)
+    keep = s > s[0] * 1e-13
+    w = vt[keep].T / s[keep]  # x = w (y + Uᵀ f)
+    f1 = u[:, keep].T @ f
+    gt = g @ w
+    ht = h - gt @ f1
+    mat = np.vstack([gt.T, ht[None]])
+    rhs = np.zeros(mat.shape[0])
+    rhs[-1] = 1.0
+    sol, _ = scipy.optimize.nnls(mat, rhs, maxiter=50 * mat.shape[1])
+    r = mat @ sol - rhs
+    if abs(r[-1]) < 1e-12:
+        return None
+    return w @ (-r[:-1] / r[-1] + f1)
 
 
 def _fit_errors(ss: RadiationSS, arr: np.ndarray, dt: float, err_time: float,
