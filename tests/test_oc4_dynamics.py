@@ -172,10 +172,9 @@ def test_oblique_sea_moves_sway_roll_and_yaw(system):
 
 def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
     """The 6-DOF radiation model of the time domain: balanced fit (every DOF weighed alike),
-    stable coupled system, B(ω) within 2 % RMS of the BEM's; A(ω) of heave and pitch within
-    0.5 %, surge and yaw within 4 % (the kernel's low-frequency A11 sits 1.3 % above the BEM's;
-    the passive, K̂(0) = 0 fit reaches 3.7 % where the unconstrained, non-passive one had 3.4 %:
-    docs/THEORY.md, radiation state space)."""
+    stable and passive coupled system, B(ω) within 2 % RMS of the BEM's; A(ω) of heave and
+    pitch within 0.5 %, surge and yaw within 4 % (the kernel's low-frequency A11 sits 1.3 %
+    above the BEM's; docs/THEORY.md, radiation state space)."""
     ss = system.radiation_ss
     assert ss.fit_error["frequency_bem"] < 0.02
     assert np.all(ss.poles.real < 0)
@@ -185,8 +184,11 @@ def test_radiation_state_space_is_stable_and_close_to_the_bem(system):
     assert ss.passivity(omega).min() >= -1e-6
     b_peak = np.diag(co.matrix_omega(system.coeffs, "radiation_damping", ss.radiating_dof
                                      ).max(axis=0))
+    # the case leaves K̂(0) free (cases/oc4_semi.toml [radiation]: imposing 0 bends the
+    # surge-pitch coupling); B(0) then stays small against the damping peak
     k0 = np.real(ss.frequency_response([0.0])[0])
-    assert np.all(np.abs(k0) <= 1e-9 * np.sqrt(np.outer(b_peak, b_peak)))
+    assert ss.low_frequency == "free"
+    assert np.all(np.abs(np.diag(k0)) <= 0.05 * b_peak)
     ainf = co.matrix(system.coeffs, "added_mass_inf")
     for w in np.linspace(0.3, 1.3, 21):
         a = np.diag(ainf + ss.equivalent_added_mass(w))

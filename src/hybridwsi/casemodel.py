@@ -247,7 +247,7 @@ def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
     fitted once and reused (a sweep ships it to its workers).
 
     ``fit``: a case's ``[radiation]`` table instead (``t_max`` [s] and ``dt`` [s] of the
-    kernel, ``max_order``, ``tol``, ``balance``: :func:`hybridwsi.hydro.statespace.
+    kernel, ``max_order``, ``tol``, ``balance``, ``low_frequency``: :func:`hybridwsi.hydro.statespace.
     fit_radiation_ss` with every DOF weighed alike), for multi-DOF kernels the default fit
     does not capture (the OC4 semi: docs/OC4_SEMI.md)."""
     if fit:
@@ -257,7 +257,8 @@ def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
         kw = {k: fit[k] for k in ("t_max", "dt") if k in fit}
         kernel = radiation_irf(coeffs, **kw).sel(radiating_dof=list(dofs),
                                                  influenced_dof=list(dofs))
-        opts = {k: fit[k] for k in ("tol", "max_order", "balance") if k in fit}
+        opts = {k: fit[k] for k in ("tol", "max_order", "balance", "low_frequency")
+                if k in fit}
         return fit_radiation_ss(kernel, coeffs=coeffs, **opts)
     tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
     return cummins.build_system(coeffs, dofs=dofs, mass=mass, radiation="statespace", dt=dt,

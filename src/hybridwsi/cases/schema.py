@@ -663,7 +663,10 @@ CASE = Table(fields={
         "dt": positive("s", "sampling step of K(t) for the fit"),
         "max_order": integer(1, "largest state-space order tried"),
         "tol": Number(lo=0.0, hi=1.0, open_lo=True, doc="relative time error of the fit"),
-        "balance": Boolean(doc="fit every DOF's kernel scaled to peak 1")},
+        "balance": Boolean(doc="fit every DOF's kernel scaled to peak 1"),
+        "low_frequency": Text(choices=("auto", "zero", "free"),
+                              doc="K̂(0) = 0 imposed (zero), left free, or chosen from the "
+                                  "kernel's integral (auto, the default)")},
         doc="the radiation state-space fit (casemodel.radiation_ss); default: "
             "cummins.simulate's own"),
     "morison": Table(fields={"element_length": positive("m", "element length along the "

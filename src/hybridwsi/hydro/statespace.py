@@ -56,7 +56,7 @@ DC_AUTO = 0.05
 #: (plus ω = 0 and the two asymptotes, :func:`_asymptotes`)
 PASSIVITY_SPAN = 100.0
 #: log-spaced frequencies of the passivity grid (plus the poles' |Im λ|)
-PASSIVITY_POINTS = 1000
+PASSIVITY_POINTS = 3000
 #: smallest eigenvalue of Re K̂(iω), relative to the largest, accepted as passive (round-off)
 PASSIVITY_TOL = 1e-8
 #: orders made passive when none meets ``tol`` (those of smallest unconstrained error)
