@@ -162,10 +162,31 @@ def test_simulate_a_copy_of_a_builtin_case_from_another_folder(tmp_path, capsys)
     assert json.loads(a.attrs["case"])["sha256"] == json.loads(b.attrs["case"])["sha256"]
 
 
+def test_an_oblique_sea_on_the_spar_is_the_head_sea_turned(model):
+    """The spar is a body of revolution: a 30° wave's excitation is the head-sea one turned
+    by 30° (surge cos 30°, sway sin 30°, pitch cos 30°, roll −sin 30°), not interpolated."""
+    coeffs = model.coeffs
+    head = waves.excitation_transfer(coeffs, ["Surge", "Pitch"], [0.0])[1][:, 0]
+    beta = np.radians(30.0)
+    dofs = ["Surge", "Sway", "Roll", "Pitch"]
+    turned = waves.excitation_transfer(coeffs, dofs, [beta])[1][:, 0]
+    scale = np.abs(head).max(axis=0)
+    np.testing.assert_allclose(turned[:, 0] / scale[0], np.cos(beta) * head[:, 0] / scale[0],
+                               atol=1e-12)
+    np.testing.assert_allclose(turned[:, 1] / scale[0], np.sin(beta) * head[:, 0] / scale[0],
+                               atol=1e-12)
+    np.testing.assert_allclose(turned[:, 3] / scale[1], np.cos(beta) * head[:, 1] / scale[1],
+                               atol=1e-12)
+    np.testing.assert_allclose(turned[:, 2] / scale[1], -np.sin(beta) * head[:, 1] / scale[1],
+                               atol=1e-12)
+
+
 def test_a_heading_the_coefficients_lack_is_refused(model):
-    wave = waves.Regular(period=10.0, height=1.0, direction=np.radians(30.0))
+    """Without a known symmetry (no body record) one stored heading covers no other."""
+    coeffs = model.coeffs.copy()
+    coeffs.attrs = {k: v for k, v in coeffs.attrs.items() if k != "body"}
     with pytest.raises(InputError, match="no excitation force for wave direction 0.5235.* rad"):
-        model.simulate(duration=1.0, dt=0.1, wave=wave)
+        waves.excitation_transfer(coeffs, ["Surge"], [np.radians(30.0)])
 
 
 def test_decay_per_dof_and_the_refusals(tmp_path, capsys):
