@@ -18,7 +18,8 @@ DESCRIPTION = (
     "predicted-unstable partition is refused unless --allow-unstable). Without --case the "
     "last --test-fraction of the cases is held out and OUT/report.json gets the rollout error "
     "with the network (OUT/network.pt/.json). With --case NAME|FILE OUT is a model folder "
-    "(model.json: the case's hash, DOFs, partition, mass, dt, coupling, features, training "
+    "(model.json: the case's hash, DOFs, partition (the case's linearised mooring and "
+    "linear damping known besides it), mass, dt, coupling, features, training "
     "files' SHA-256, training envelope, held-out errors, stability certificate; network.pt/"
     ".json) that simulate --case ... --network OUT runs on new seas; histories may lack "
     "F_exc (computed from eta through the case's excitation transfer function) and F_tot "
@@ -167,11 +168,13 @@ def _network_settings(args: argparse.Namespace, case: Any = None, dt: float = 0.
     return out
 
 
-def _pipeline(args: argparse.Namespace, settings: dict[str, Any], default_partition: str):
+def _pipeline(args: argparse.Namespace, settings: dict[str, Any], default_partition: str,
+              known_extra: list | tuple = ()):
     from hybridwsi.surrogate.pipeline import HybridPipeline
 
     return HybridPipeline(args.partition or default_partition, mode=args.mode,
                           corrections=args.corrections, network=settings,
+                          known_extra=known_extra,
                           allow_unstable=args.allow_unstable, progress=not args.quiet)
 
 
@@ -200,7 +203,7 @@ def _run_certified(args: argparse.Namespace) -> int:
     """``--case``: train and certify a model folder (:mod:`hybridwsi.surrogate.certified`)."""
     from hybridwsi.casemodel import CaseModel
     from hybridwsi.history import time_step
-    from hybridwsi.surrogate.certified import train_model
+    from hybridwsi.surrogate.certified import case_linear, train_model
 
     hists, names, _ = _load(args.data, args.dofs, args.eta)
     hists, names = hists[: args.max_cases], names[: args.max_cases]
@@ -208,8 +211,8 @@ def _run_certified(args: argparse.Namespace) -> int:
     model = CaseModel.build(args.case, dofs=dofs, coeffs=args.coeffs, quick=args.quick,
                             progress=not args.quiet)
     settings = _network_settings(args, model.case, time_step(hists[0]))
-    cm = train_model(hists, names, model, pipeline=_pipeline(args, settings, "auto"),
-                     test_fraction=args.test_fraction)
+    pipe = _pipeline(args, settings, "auto", case_linear(model))
+    cm = train_model(hists, names, model, pipeline=pipe, test_fraction=args.test_fraction)
     cm.save(args.out)  # only once certified: nothing written on a refusal
     if not args.quiet:
         cert, doc = cm.doc["certificate"], cm.doc

@@ -7,7 +7,8 @@ The folder holds
   normalisation (:meth:`~hybridwsi.surrogate.network.ForceNetwork.save`);
 - ``model.json`` — what the hybrid solver needs and what it was certified for: the hybridwsi
   version, the case (name and content SHA-256), the DOFs, the partition and its known
-  components, the mass, Δt, the coupling (mode, corrections), the feature settings, the
+  components (the partition's candidates plus the case's linearised mooring and linear
+  damping, :func:`case_linear`), the mass, Δt, the coupling (mode, corrections), the feature settings, the
   SHA-256 of every training file, the training envelope (per DOF the range of z, ż, z̈; per
   network channel the range of its values), the held-out errors per DOF, and the stability
   certificate (spectral radius and added-mass ratio at the certified Δt, the largest stable Δt,
@@ -41,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import version
-from hybridwsi.casemodel import CaseModel, radiation_ss, record_wave
+from hybridwsi.casemodel import CaseModel, linear_components, radiation_ss, record_wave
 from hybridwsi.cummins.forcing import excitation
 from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.partition import build_candidates
@@ -157,6 +158,16 @@ def prepare_histories(hists: Sequence[xr.Dataset], names: Sequence[str], model: 
     return out
 
 
+def case_linear(model: CaseModel) -> list:
+    """The case's own linear models known besides the partition: its mooring linearised
+    about rest (−K z) and its additional linear damping
+    (:func:`hybridwsi.casemodel.linear_components`), so that the network learns only their
+    nonlinear remainder (with the drag). Measured on OC3-Hywind (surge, heave, pitch; 2 × 1800 s
+    training, a third sea): RMS error of surge 0.85 % with them, 6.6 % without (the network
+    then carries the whole surge mooring stiffness and damping of the 125 s surge mode)."""
+    return linear_components(model.case, model.dofs)
+
+
 # ------------------------------------------------------------------------------- envelope
 def envelope(hists: Sequence[xr.Dataset], spec: FeatureSpec) -> dict[str, Any]:
     """Per DOF the [min, max] of z, ż, z̈ and per network channel (``name[index]``) the
@@ -234,6 +245,7 @@ def train_model(hists: Sequence[xr.Dataset], files: Sequence[str], model: CaseMo
                  "file": None if model.case.path is None else str(model.case.path)},
         "dofs": list(model.dofs),
         "partition": {"name": pipe.partition_, "known": list(pipe.candidates_),
+                      "case_linear": [k.describe() for k in case_linear(model)],
                       "components": [k.describe() for k in pipe.known_],
                       "network_inputs": list(pipe.inputs_),
                       "diagnosis": _jsonable(pipe.diagnosis_)},
@@ -348,7 +360,8 @@ class CertifiedModel:
                             extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
         case.attrs["radiation_ss"] = json.dumps(radiation_ss(
             model.coeffs, dofs, None, dt, model.case.get("radiation")).to_dict())
-        pipe.known_ = list(build_candidates(case, model.coeffs, pipe.candidates_).values())
+        pipe.known_ = [*build_candidates(case, model.coeffs, pipe.candidates_).values(),
+                       *case_linear(model)]
         # diverged: |z| above BLOWUP_FACTOR x the largest the training saw
         top = max(abs(x) for r in self.doc["envelope"]["kinematics"]["z"].values() for x in r)
         res = pipe.rollout([case], progress=progress, amplitude=top)

@@ -162,6 +162,9 @@ class HybridPipeline:
     known : sequence of KnownComponent, optional
         The partition's known components as built already (then ``partition`` only names
         it; no diagnosis, no candidates built from the histories).
+    known_extra : sequence of KnownComponent
+        Components known besides the partition's (a case's linearised mooring and linear
+        damping: the network then learns only their nonlinear remainder).
     mode : {"lagged", "corrected", "implicit"}
         Coupling of the network in the time step (:mod:`hybridwsi.surrogate.rollout`).
     corrections : int, optional
@@ -177,7 +180,8 @@ class HybridPipeline:
     """
 
     def __init__(self, partition: str = "auto", *, inputs: Sequence[str] | None = None,
-                 known: Sequence[KnownComponent] | None = None, mode: str = "corrected", corrections: int | None = None,
+                 known: Sequence[KnownComponent] | None = None,
+                 known_extra: Sequence[KnownComponent] = (), mode: str = "corrected", corrections: int | None = None,
                  network: Mapping[str, Any] | None = None, allow_unstable: bool = False,
                  force: str = "F_tot", progress: bool = False) -> None:
         if mode not in MODES:
@@ -185,6 +189,7 @@ class HybridPipeline:
         self.partition = partition
         self.inputs = None if inputs is None else tuple(inputs)
         self.known = None if known is None else list(known)
+        self.known_extra = list(known_extra)
         self.mode = mode
         self.corrections = corrections
         self.network = dict(network or {})
@@ -247,7 +252,8 @@ class HybridPipeline:
                         f"partition {self.partition_!r} (network inputs "
                         f"{', '.join(self.inputs_)})", names)
         self.known_ = (list(self.known) if self.known is not None else
-                       list(build_candidates(hs[0], coeffs, self.candidates_).values()))
+                       list(build_candidates(hs[0], coeffs, self.candidates_).values())
+                       ) + self.known_extra
 
     def _predict(self, references: Sequence[xr.Dataset]) -> HybridPipeline:
         """``stability_`` and ``corrections_``; refuse (or warn on) a predicted-unstable
