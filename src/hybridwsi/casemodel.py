@@ -561,6 +561,19 @@ class CaseModel:
             ss = radiation_ss(coeffs, dofs, None, dt, case.get("radiation"))
         return cls(case, dofs, coeffs, model, table, dt, ss)
 
+    def state_space(self, dt: float) -> RadiationSS | None:
+        """The radiation state space of a run at ``dt`` [s]: the one built with the model
+        when fitted for that step, or when the case's ``[radiation]`` table fits it (its
+        kernel sampling is the table's, whatever the run's step: the same fit, ~20 s on the
+        OC4 semi, is not repeated); a new fit of that table otherwise; None (the run fits its
+        own) without the table."""
+        if self.radiation_ss is not None and (self.case.get("radiation") or (
+                self.dt is not None and math.isclose(self.dt, dt))):
+            return self.radiation_ss
+        if self.case.get("radiation"):
+            return radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
+        return None
+
     @cached_property
     def body(self) -> Any:
         """The case's body (:func:`body_from_case`)."""
@@ -701,10 +714,7 @@ class CaseModel:
         z0 = offset + np.broadcast_to(np.asarray(z0, dtype=float), (n,))
         nonlinear = forces["hydrostatics"] == "nonlinear"
         excite = wave if forces["excitation"] else None
-        ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
-              and forces["radiation"] == "statespace" else None)
-        if ss is None and forces["radiation"] == "statespace" and self.case.get("radiation"):
-            ss = radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
+        ss = self.state_space(dt) if forces["radiation"] == "statespace" else None
         hist = cummins.simulate(
             self.coeffs, dofs=self.dofs, duration=duration, dt=dt, wave=excite, z0=z0,
             zdot0=zdot0, forces=list(comps.values()), radiation=forces["radiation"],

@@ -43,7 +43,7 @@ from hybridwsi.cummins import simulate
 from hybridwsi.diagnostic.regression import regress
 from hybridwsi.dofs import RIGID_DOFS, motion_unit
 from hybridwsi.errors import InputError
-from hybridwsi.files import atomic_write
+from hybridwsi.files import _jsonable, atomic_write
 from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberMorison, \
     MooringForce, MooringSystem
 from hybridwsi.hydro import coefficients as co
@@ -51,6 +51,7 @@ from hybridwsi.hydro.modal import Mode, natural_frequencies
 from hybridwsi.report import fowt_diagnostic as fd
 from hybridwsi.report.fowt import decay_figure, decay_frequency, decay_histories, rao_curve, \
     rao_point
+from hybridwsi.report.fowt_semi_hybrid import run_semi_hybrid, semi_hybrid_markdown
 from hybridwsi.report.plots import save
 from hybridwsi.waves import JONSWAP
 
@@ -365,8 +366,9 @@ def rao_worst(points: Sequence[Mapping[str, Any]], heading: float, key: str
 
 def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> str:
     """Write ``out/fowt_semi/`` (natural frequencies, decays, RAOs at three headings, the 6×6
-    diagnostic in a 30° sea; JSON, PNG and the NetCDF behind each figure) and return the
-    report section (Markdown). ``quick``: every other RAO period, a 300 s sea."""
+    diagnostic in a 30° sea, the hybrid: ``hybrid.json``, ``hybrid_rollout.png/.nc`` and the
+    model folder ``hybrid_model/``; JSON, PNG and the NetCDF behind each figure) and return
+    the report section (Markdown). ``quick``: every other RAO period, 300 s seas."""
     start = time.time()
 
     def log(msg: str) -> None:
@@ -408,7 +410,14 @@ def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> s
     diag = semi_diagnostic(system, hist)
     write_json("diagnostic.json", diag)
     log("diagnostic")
-    return semi_markdown(nat, points, diag, time.time() - start)
+
+    hyb, (fig, ds) = run_semi_hybrid(system, case, folder, quick=quick, log=log)
+    write_json("hybrid.json", _jsonable(hyb))
+    save(fig, folder / "hybrid_rollout.png")
+    ds.to_netcdf(folder / "hybrid_rollout.nc")
+    log("hybrid")
+    return (semi_markdown(nat, points, diag, time.time() - start) + "\n"
+            + semi_hybrid_markdown(hyb))
 
 
 def semi_markdown(nat: Mapping[str, Any], points: Sequence[Mapping[str, Any]],

@@ -131,8 +131,7 @@ def prepare_histories(hists: Sequence[xr.Dataset], names: Sequence[str], model: 
     ``eta``, ``F_tot = M z̈``, the case's mass and radiation state space at their Δt."""
     check_cases(hists, names, model.case.sha256, model.case.label)
     dofs = list(model.dofs)
-    ss = json.dumps(radiation_ss(model.coeffs, dofs, None, time_step(hists[0]),
-                                 model.case.get("radiation")).to_dict())
+    ss = json.dumps(_state_space(model, time_step(hists[0])).to_dict())
     out = []
     for h, name in zip(hists, names):
         missing = [v for v in KINEMATICS if v not in h]
@@ -156,6 +155,13 @@ def prepare_histories(hists: Sequence[xr.Dataset], names: Sequence[str], model: 
         h.attrs["radiation_ss"] = ss
         out.append(h)
     return out
+
+
+def _state_space(model: CaseModel, dt: float) -> Any:
+    """The radiation state space of ``model`` at ``dt`` [s]: the model's own when it serves
+    (:meth:`~hybridwsi.casemodel.CaseModel.state_space`), else the fit ``simulate`` makes."""
+    ss = model.state_space(dt)
+    return ss if ss is not None else radiation_ss(model.coeffs, list(model.dofs), None, dt)
 
 
 def case_linear(model: CaseModel) -> list:
@@ -358,8 +364,7 @@ class CertifiedModel:
         case = make_history(t, zero, zero, zero, forces={"F_exc": f_exc}, dof=dofs,
                             mass=np.asarray(pipe.mass_), check=False,
                             extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
-        case.attrs["radiation_ss"] = json.dumps(radiation_ss(
-            model.coeffs, dofs, None, dt, model.case.get("radiation")).to_dict())
+        case.attrs["radiation_ss"] = json.dumps(_state_space(model, dt).to_dict())
         pipe.known_ = [*build_candidates(case, model.coeffs, pipe.candidates_).values(),
                        *case_linear(model)]
         # diverged: |z| above BLOWUP_FACTOR x the largest the training saw
