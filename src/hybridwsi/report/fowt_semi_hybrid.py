@@ -95,7 +95,9 @@ def band_errors(hyb: xr.Dataset, ref: xr.Dataset, split_hz: float = LOW_FREQUENC
         spec = np.fft.rfft(x - x.mean(0), axis=0)
         return np.fft.irfft(spec * low[:, None], n=t.size, axis=0) + x.mean(0)
 
-    rms = lambda x: np.sqrt(np.mean(x ** 2, axis=0))  # noqa: E731
+    def rms(x: np.ndarray) -> np.ndarray:
+        return np.sqrt(np.mean(x ** 2, axis=0))
+
     scale = np.maximum(rms(z_ref), 1e-300)
     half = t.size // 2
     return {"low": rms(lowpass(err)) / scale, "wave": rms(err - lowpass(err)) / scale,
