@@ -364,11 +364,13 @@ def rao_worst(points: Sequence[Mapping[str, Any]], heading: float, key: str
     return out
 
 
-def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> str:
+def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False,
+                  hybrid: bool = True) -> str:
     """Write ``out/fowt_semi/`` (natural frequencies, decays, RAOs at three headings, the 6×6
     diagnostic in a 30° sea, the hybrid: ``hybrid.json``, ``hybrid_rollout.png/.nc`` and the
     model folder ``hybrid_model/``; JSON, PNG and the NetCDF behind each figure) and return
-    the report section (Markdown). ``quick``: every other RAO period, 300 s seas."""
+    the report section (Markdown). ``quick``: every other RAO period, 300 s seas;
+    ``hybrid`` off: no hybrid (as :func:`hybridwsi.report.fowt.run_fowt`)."""
     start = time.time()
 
     def log(msg: str) -> None:
@@ -411,13 +413,15 @@ def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> s
     write_json("diagnostic.json", diag)
     log("diagnostic")
 
-    hyb, (fig, ds) = run_semi_hybrid(system, case, folder, quick=quick, log=log)
-    write_json("hybrid.json", _jsonable(hyb))
-    save(fig, folder / "hybrid_rollout.png")
-    ds.to_netcdf(folder / "hybrid_rollout.nc")
-    log("hybrid")
-    return (semi_markdown(nat, points, diag, time.time() - start) + "\n"
-            + semi_hybrid_markdown(hyb))
+    hybrid_md = ""
+    if hybrid:
+        hyb, (fig, ds) = run_semi_hybrid(system, case, folder, quick=quick, log=log)
+        write_json("hybrid.json", _jsonable(hyb))
+        save(fig, folder / "hybrid_rollout.png")
+        ds.to_netcdf(folder / "hybrid_rollout.nc")
+        hybrid_md = "\n" + semi_hybrid_markdown(hyb)
+        log("hybrid")
+    return semi_markdown(nat, points, diag, time.time() - start) + hybrid_md
 
 
 def semi_markdown(nat: Mapping[str, Any], points: Sequence[Mapping[str, Any]],
