@@ -83,7 +83,8 @@ def hybrid_markdown(hyb: Mapping[str, Any]) -> str:
             worst = {d: max(c[d] for c in e["rollout_error_percent_rms"])
                      for d in e["rollout_error_percent_rms"][0]}
             lines.append(
-                f"| {p['partition']} | {m}{' ×' + str(e['corrections']) if e['corrections'] else ''}"
+                f"| {p['partition']} | "
+                f"{m}{' ×' + str(e['corrections']) if e['corrections'] else ''}"
                 f" | {e['added_mass_ratio']:.3f} | {e['spectral_radius']:.4f} | "
                 f"{'stable' if e['predicted_stable'] else 'unstable'} | "
                 f"{_observed(e)} | "
@@ -138,7 +139,8 @@ def diagnostic_markdown(diag: Mapping[str, Any], observed: Mapping[str, bool] | 
             f"{r['lagged_verdict']} | {obs_s} |")
     lines += ["", "| partition | left to the network | goes to | reason |", "|---|---|---|---|"]
     for r in diag["partitions"]:
-        lines.append(f"| {r['partition']} | {r['left_to_network']} | {r['where']} | {r['reason']} |")
+        lines.append(f"| {r['partition']} | {r['left_to_network']} | {r['where']} | "
+                     f"{r['reason']} |")
     return "\n".join(lines) + "\n"
 
 

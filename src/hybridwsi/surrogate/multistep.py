@@ -35,8 +35,9 @@ if TYPE_CHECKING:  # the set-up's module imports this one
 def rk4_step(rhs: Any, z: Any, v: Any, x: Any, h: float) -> tuple[Any, Any, Any]:
     """One classical Runge–Kutta step of ``(ż, v̇, ẋ) = rhs(z, v, x)`` of length ``h`` [s].
 
-    Arithmetic only, so the same step serves NumPy arrays (:func:`hybridwsi.surrogate.kramer.integrate_decay`) and torch
-    tensors (:func:`torch_decays`, differentiable).
+    Arithmetic only, so the same step serves NumPy arrays
+    (:func:`hybridwsi.surrogate.structured.integrate_decay`) and torch tensors
+    (:func:`torch_decays`, differentiable).
     """
     d1 = rhs(z, v, x)
     d2 = rhs(z + 0.5 * h * d1[0], v + 0.5 * h * d1[1], x + 0.5 * h * d1[2])
@@ -69,8 +70,8 @@ def torch_decays(net: Any, setup: KramerSetup, h0: np.ndarray, dt: float, n_step
                  first: float = 0.0) -> Any:
     """Free decays of the hybrid ``(m + A∞) z̈ = F_hs(z) − C_r x + N(z, ż)`` in torch (RK4).
 
-    The same equation as the rollout of :func:`hybridwsi.surrogate.kramer.roll_network` (exact hydrostatics, constant
-    A∞, the radiation state space), differentiable in the network's weights. With ``first``
+    The same equation as the rollout of :func:`hybridwsi.surrogate.kramer.roll_network`
+    (exact hydrostatics, constant A∞, the radiation state space), differentiable in the network's weights. With ``first``
     > 0 the first step is ``first`` [s] long (times 0, first, first + dt, ...), which puts a
     lead-shifted data grid on the steps. Returns heave [m], a tensor (len(h0), n + 1), n =
     n_steps (+ 1 with ``first``).
