@@ -11,7 +11,7 @@ or mass-like and how it changes with amplitude, and two residual models are fitt
 and rolled out on the third (leave one drop out, all three choices):
 
 - a *structured* model, linear in its coefficients and fitted by least squares on the
-  training drops' heave (:func:`fit_output_error`),
+  training drops' heave (:func:`~hybridwsi.surrogate.structured.fit_output_error`),
   ``F_res = −a(z) z̈ − b₁ ż − b₂ |ż| ż − k₁ z − k₃ z³`` with a position-dependent added-mass
   change ``a(z) = a₁ z + a₂ z²`` (the added mass of a sphere that is lifted out of the water
   falls towards zero), linear plus quadratic drag and an amplitude-dependent stiffness;
