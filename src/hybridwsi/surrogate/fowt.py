@@ -295,11 +295,10 @@ def checked_rollout(net: ForceNetwork, cases: Sequence[xr.Dataset],
                     ) -> tuple[Any, int, RolloutResult]:
     """Predict the coupling's stability, then roll it out, unstable or not.
 
-    :func:`~hybridwsi.surrogate.rollout.check_stability` on ``reference`` (every
-    ``stride``-th state); in ``corrected`` mode the corrections follow the network's added-mass
-    ratio (:func:`~hybridwsi.surrogate.rollout.corrections_for`) and the prediction is made
-    again for them; then :func:`~hybridwsi.surrogate.rollout.rollout` of ``cases`` (a partition
-    predicted unstable runs too: the study observes what it does).
+    The pipeline's :func:`~hybridwsi.surrogate.pipeline.predict_stability` on ``reference``
+    (every ``stride``-th state; in ``corrected`` mode with the corrections the network's
+    added-mass ratio calls for), then :func:`~hybridwsi.surrogate.rollout.rollout` of
+    ``cases`` (a partition predicted unstable runs too: the study observes what it does).
 
     Returns
     -------
@@ -308,16 +307,12 @@ def checked_rollout(net: ForceNetwork, cases: Sequence[xr.Dataset],
         Predictor-corrector passes (1 outside ``corrected``).
     result : RolloutResult
     """
-    from hybridwsi.surrogate.rollout import check_stability, corrections_for, rollout
+    from hybridwsi.surrogate.pipeline import predict_stability
+    from hybridwsi.surrogate.rollout import rollout
 
-    def predict(n: int) -> Any:
-        return check_stability(net, reference, mass=mass, known=known, mode=mode,
-                               stride=stride, corrections=n)
-
-    pred = predict(1)
-    n_corr = corrections_for(pred.added_mass_ratio) if mode == "corrected" else 1
-    if n_corr != 1:
-        pred = predict(n_corr)
+    refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
+    pred, n_corr = predict_stability(net, refs, mass=mass, known=known, mode=mode,
+                                     stride=stride)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # unstable ones run on purpose
         res = rollout(net, list(cases), mass=mass, known=known, mode=mode, corrections=n_corr,

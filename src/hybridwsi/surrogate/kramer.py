@@ -306,16 +306,19 @@ def release_case(setup: KramerSetup, drop: str, dt: float, duration: float) -> x
 
 def roll_network(net: Any, setup: KramerSetup, drop: str, train: Sequence[xr.Dataset],
                  dt: float, duration: float) -> dict[str, Any]:
-    """Predict the hybrid's stability (``check_stability``), then roll it out from release.
+    """Predict the hybrid's stability (the pipeline's
+    :func:`~hybridwsi.surrogate.pipeline.predict_stability`, lagged coupling, linearised on
+    the training drops), then roll it out from release.
 
     Observed stable: the rollout neither blew up nor left the floating range, and it decays
     (:func:`decays`).
     """
-    from hybridwsi.surrogate.rollout import check_stability, rollout  # torch ("ml" extra)
+    from hybridwsi.surrogate.pipeline import predict_stability  # torch ("ml" extra)
+    from hybridwsi.surrogate.rollout import rollout
 
     known = setup.known()
     refs = [training_slice(h) for h in train]
-    pred = check_stability(net, refs, mass=setup.mass, known=known, dt=dt, mode="lagged")
+    pred, _ = predict_stability(net, refs, mass=setup.mass, known=known, mode="lagged", dt=dt)
     case = release_case(setup, drop, dt, duration)
     try:
         with warnings.catch_warnings():
