@@ -36,6 +36,16 @@ def test_history_imports_nothing_above_it(upper):
                    for m in _imported_modules(SRC / "history"))
 
 
+@pytest.mark.parametrize("lower", ["surrogate", "diagnostic"])
+@pytest.mark.parametrize("upper", ["hybridwsi.report", "hybridwsi.commands"])
+def test_library_imports_neither_report_nor_commands(lower, upper):
+    # the studies (surrogate/kramer.py, surrogate/fowt.py) are library code: the report and
+    # the command line call them, never the other way round (issue 28 item 3)
+    imported = _imported_modules(SRC / lower)
+    assert any(m.startswith("hybridwsi.") for m in imported)  # the scan sees the imports
+    assert not [m for m in imported if m == upper or m.startswith(upper + ".")]
+
+
 def test_importers_and_report_packages_keep_their_public_names():
     from hybridwsi import importers
     from hybridwsi.report import reproduce, validation

@@ -40,6 +40,7 @@ from scipy.interpolate import CubicSpline
 from hybridwsi.casemodel import case_coefficients, radiation_ss
 from hybridwsi.cases import Case, load_case
 from hybridwsi.cummins import simulate
+from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.regression import regress
 from hybridwsi.dofs import RIGID_DOFS, motion_unit
 from hybridwsi.errors import InputError
@@ -48,11 +49,11 @@ from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberM
     MooringForce, MooringSystem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import Mode, natural_frequencies
-from hybridwsi.report import fowt_diagnostic as fd
 from hybridwsi.report.fowt import decay_figure, decay_frequency, decay_histories, rao_curve, \
     rao_point
 from hybridwsi.report.fowt_semi_hybrid import run_semi_hybrid, semi_hybrid_markdown
 from hybridwsi.report.plots import save
+from hybridwsi.surrogate import fowt as fd
 from hybridwsi.waves import JONSWAP
 
 #: initial offsets of the free decays [m, m, m, rad, rad, rad]: small (linear mooring)
@@ -215,7 +216,7 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
     identifiable, i.e. also the random error small), the lagged
     verdict (spectral radius of the Newmark lagged step at the history's Δt) and, for the
     linear known parts 1–3, the observed lagged run of the regressed surrogate
-    (:mod:`hybridwsi.report.fowt_diagnostic`, the OC3 analysis in six DOFs)."""
+    (:mod:`hybridwsi.surrogate.fowt`, the OC3 analysis in six DOFs)."""
     dofs = [str(d) for d in hist["dof"].values]
     dt = float(hist["time"].values[1] - hist["time"].values[0])
     parts = fd.partitions(hist, Hydrostatic(system.mooring), LinearDamping(np.zeros((6, 6))))
@@ -238,7 +239,7 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
                         "wave": hist.attrs.get("wave")},
             "std_z": dict(zip(dofs, np.asarray(hist["z"].values).std(axis=0).tolist())),
             "mass": mass.tolist(), "added_mass_inf": a_inf.tolist(),
-            "rho_M_inv_A_inf": fd.stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
+            "rho_M_inv_A_inf": stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
             "partitions": rows}
 
 

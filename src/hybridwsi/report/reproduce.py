@@ -495,7 +495,7 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
 
     kramer_md = ""
     if decay and hybrid:  # the hybrid on the measured decays (leave one drop out)
-        from hybridwsi.report.kramer_report import run_kramer_hybrid
+        from hybridwsi.report.kramer_hybrid import run_kramer_hybrid
 
         _log("Kramer hybrid: leave one drop out", progress)
         kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)

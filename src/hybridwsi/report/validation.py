@@ -18,7 +18,8 @@ import pandas as pd
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history import fit_damped_oscillator, mean_crossing_period
+from hybridwsi.history import fit_damped_oscillator
+from hybridwsi.history.signal import crossing_period, rms_heave_error
 from hybridwsi.importers.kramer import (
     KRAMER_DROPS,
     kramer_numerical_files,
@@ -27,44 +28,6 @@ from hybridwsi.importers.kramer import (
 )
 
 DROPS = KRAMER_DROPS
-
-
-def rms_heave_error(
-    t_model: np.ndarray,
-    zn_model: np.ndarray,
-    t_exp: np.ndarray,
-    zn_exp: np.ndarray,
-    te0: float,
-    window: tuple[float, float] = (0.0, 5.0),
-) -> float:
-    """RMS of normalised heave error over ``t/Te0 ∈ window`` on the experiment's grid.
-
-    Parameters
-    ----------
-    t_model, zn_model : ndarray
-        Model time [s] (increasing) and heave / H0 [-].
-    t_exp, zn_exp : ndarray
-        Experiment time [s] and mean heave / H0 [-].
-    te0 : float
-        Normalisation period [s].
-    window : (float, float)
-        Window in units of ``te0``.
-
-    Returns
-    -------
-    float
-        RMS error [-].
-    """
-    t_model = np.asarray(t_model, float)
-    lo, hi = window[0] * te0, window[1] * te0
-    sel = (t_exp >= lo - 1e-12) & (t_exp <= hi + 1e-12)
-    if t_model[0] > lo + 1e-9 or t_model[-1] < hi - 1e-9:
-        raise InputError(
-            f"model record [{t_model[0]:.3f}, {t_model[-1]:.3f}] s does not cover the RMS window "
-            f"[{lo:.3f}, {hi:.3f}] s"
-        )
-    zi = np.interp(t_exp[sel], t_model, zn_model)
-    return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
 
 
 @dataclass
@@ -128,16 +91,6 @@ class DecayValidation:
                 rows.append(f"| {drop} | " + " | ".join(
                     f"{per[n]:.4f}" if n in per else "–" for n in names) + " |")
         return "\n".join(rows)
-
-
-def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
-    """Mean crossing period of a decay record over ``window`` (same unit as ``t``).
-
-    Every record here (experiment, published codes, our models) is heave measured from its
-    equilibrium, so the crossings are those of z = 0; the first half cycle, which depends on
-    the release, is skipped (:func:`hybridwsi.history.mean_crossing_period`).
-    """
-    return mean_crossing_period(t, z, window, z_eq=0.0, skip=1)
 
 
 def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
