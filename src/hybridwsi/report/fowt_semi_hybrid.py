@@ -230,8 +230,11 @@ def semi_hybrid_doc(cm: CertifiedModel, rows: list[dict[str, Any]], model: CaseM
         "held_out": rows,
         "observed_stable": all(r["observed_stable"] for r in rows),
         "agree": bool(cert["stable"]) == all(r["observed_stable"] for r in rows),
-        "damping_evidence": {"dofs": list(RIGID_DOFS), "network_beta_diag": beta_net.tolist(),
-                             "drag_beta_diag": beta_drag.tolist()},
+        "damping_evidence": {
+            "dofs": list(RIGID_DOFS), "network_beta_diag": beta_net.tolist(),
+            "drag_beta_diag": beta_drag.tolist(),
+            # the diagnostic's linear regression of the same residual (certificate)
+            "regression_beta_diag": np.diag(np.asarray(cert["diagnostic"]["beta"])).tolist()},
     }
 
 
