@@ -26,7 +26,6 @@ The results (metrics, spectra, time-series excerpts) go to
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -35,64 +34,18 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import provenance
-from hybridwsi.casemodel import CaseModel, linear_components
+from hybridwsi.casemodel import CaseModel
 from hybridwsi.cli import Parser, run_script
-from hybridwsi.diagnostic.partition import build_candidates
 from hybridwsi.files import read_netcdf, to_netcdf, write_json
 from hybridwsi.report import fowt_moordyn_hybrid as fmh
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.pipeline import HybridPipeline
-from hybridwsi.waves import JONSWAP
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIP = ROOT / "src" / "hybridwsi" / "data" / "oc3_moordyn_hybrid"
-DOFS = ("Surge", "Heave", "Pitch")
-DT = 0.1
-RAMP = 60.0
-TI = 0.1
-#: the known part of the partition besides the case's components (diagnostic candidates)
-CANDIDATES = ("hydrostatic", "added_mass_inf", "radiation_memory", "excitation")
-#: seas: Hs [m], Tp [s], wave seed, mean hub wind [m/s], wind seed. Training winds 7-9 m/s
-#: (below rated: region 2, positive aerodynamic damping); held-out seas AND winds between them
-TRAIN = {"train1": (4.0, 10.0, 1, 7.0, 1), "train2": (6.0, 12.0, 2, 9.0, 2),
-         "train3": (5.0, 11.0, 3, 8.0, 3)}
-HELD = {"held1": (4.5, 10.5, 101, 8.5, 101), "held2": (5.5, 11.5, 102, 7.5, 102)}
-LONG = {"long": (5.0, 11.0, 201, 8.0, 201)}
-#: the network: the case's [hybrid.network] (window 6 taps 0.5 s apart, η 0.5 s ahead)
-MODE = "corrected"
+NETWORK = SHIP.parent / "oc3_moordyn_hybrid_network"  # .pt/.json: the benchmark's
 #: epochs of the training (the case's 150 / 20 cost ~45 min here on 3 x 1800 s of data)
 NETWORK_EPOCHS = {"max_epochs": 60, "patience": 10}
-
-
-def case_model(sea: tuple, mooring: str, *, linear: bool = False) -> CaseModel:
-    """The OC3 model of one sea's wind: operating rotor, turbulent wind, slow drift, drag
-    (``linear``: no drag, no drift: the mooring is added as its linearisation)."""
-    _, _, _, wind, wseed = sea
-    forces = {"drift": not linear, "morison": not linear, **({"mooring": "none"} if linear
-                                                              else {})}
-    return CaseModel.build("oc3_hywind", dofs=DOFS, dt=DT, mooring=None if linear else mooring,
-                           overrides={
-                               "rotor": {"state": "operating", "wind_speed": wind,
-                                         "turbulence_intensity": TI, "wind_seed": wseed},
-                               "forces": forces})
-
-
-def jonswap(sea: tuple) -> JONSWAP:
-    hs, tp, seed = sea[:3]
-    return JONSWAP(hs=hs, tp=tp, seed=seed)
-
-
-def simulate(kind: str, sea: tuple, duration: float) -> xr.Dataset:
-    """One run: ``moordyn`` (the reference), ``table`` (quasi-static mooring, else the same),
-    ``linear`` (linearised mooring, no drag, no drift, the same rotor and wind)."""
-    if kind != "linear":
-        return case_model(sea, kind).simulate(duration=duration, dt=DT, wave=jonswap(sea),
-                                              ramp=RAMP)
-    model = case_model(sea, "none", linear=True)
-    lin = linear_components(model.case, DOFS)
-    z0 = fmh.linear_offset(model, lin[0].linear_coefficients(len(DOFS))[2])
-    return model.simulate(duration=duration, dt=DT, wave=jonswap(sea), ramp=RAMP,
-                          extra={"linear_mooring": lin[0]}, from_offset=False, z0=z0)
 
 
 def cached(work: Path, kind: str, name: str, sea: tuple, duration: float) -> xr.Dataset:
@@ -100,82 +53,51 @@ def cached(work: Path, kind: str, name: str, sea: tuple, duration: float) -> xr.
     path = work / f"{kind}_{name}.nc"
     if not path.is_file():
         start = time.perf_counter()
-        hist = simulate(kind, sea, duration)
+        hist = fmh.simulate(kind, sea, duration)
         hist.attrs["wall_s"] = time.perf_counter() - start
         to_netcdf(hist, path)
         print(f"{kind} {name}: {hist.attrs['wall_s']:.0f} s wall", flush=True)
     return read_netcdf(path)
 
 
-def known_part(hist: xr.Dataset, sea: tuple, *, rotor: bool) -> list:
-    """The partition's known components on ``hist``: the candidates, the additional damping,
-    the quasi-static (tabulated) mooring and, with ``rotor``, this sea's rotor."""
-    comps = case_model(sea, "table").components()
-    known = [*build_candidates(hist, case_model(sea, "table").coeffs, CANDIDATES).values(),
-             comps["linear_damping"], comps["mooring"]]
-    return known + ([comps["rotor"]] if rotor else [])
-
-
-def prepared(hist: xr.Dataset, model: CaseModel) -> xr.Dataset:
-    """The history with the radiation state space its ``radiation_memory`` candidate reads
-    and ``F_norotor = F_tot − F_rotor``: the force the residual is taken of when the rotor is
-    known (its recorded force: each history has its own wind)."""
-    hist = hist.assign(F_norotor=hist["F_tot"] - hist["F_rotor"])
-    hist.attrs["radiation_ss"] = json.dumps(model.radiation_ss.to_dict())
-    return hist
-
-
 def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> tuple[ForceNetwork, Any]:
     """The network through the pipeline (resumed from ``work/network.*`` when there)."""
-    hs = [prepared(h, model) for h in refs.values()]
-    known = known_part(hs[0], TRAIN["train1"], rotor=False)
+    hs = [fmh.prepared(h, model) for h in refs.values()]
+    known = fmh.known_part(hs[0], fmh.TRAIN["train1"], rotor=False)
     # the case's [hybrid.network] with fewer epochs: 3 x 1800 s of data make ~100 batches an
     # epoch, and the training must fit the shared 2-core machine (NETWORK_EPOCHS)
     net_cfg = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS}
     pipe = HybridPipeline("moordyn-table+drift+drag", inputs=("z", "zdot", "eta"), known=known,
-                          mode=MODE, network=net_cfg, force="F_norotor", allow_unstable=True,
+                          mode=fmh.MODE, network=net_cfg, force="F_norotor", allow_unstable=True,
                           progress=False)
     path = work / "network"
     if (work / "network.pt").is_file():
         net = ForceNetwork.load(path)
-        pipe = HybridPipeline.from_network(net, known, mass=hs[0]["mass"].values, dt=DT,
-                                           mode=MODE, corrections=2)
+        pipe = HybridPipeline.from_network(net, known, mass=hs[0]["mass"].values, dt=fmh.DT,
+                                           mode=fmh.MODE, corrections=2)
         pipe._predict(hs)
         return net, pipe
     start = time.perf_counter()
     pipe.fit(hs, model.coeffs)
     pipe.network_.save(path)
+    pipe.network_.save(NETWORK)
     print(f"trained in {time.perf_counter() - start:.0f} s", flush=True)
     return pipe.network_, pipe
-
-
-def run_hybrid(pipe: HybridPipeline, ref: xr.Dataset, sea: tuple, model: CaseModel
-               ) -> tuple[xr.Dataset, float]:
-    """The hybrid on ``ref``'s sea and wind (its first window as initial state) and its wall
-    time [s]; the quasi-static line tensions along its motion added."""
-    h = prepared(ref, model)
-    run = HybridPipeline.from_network(pipe.network_, known_part(h, sea, rotor=True),
-                                      mass=pipe.mass_, dt=DT, mode=MODE,
-                                      corrections=pipe.corrections_)
-    start = time.perf_counter()
-    hyb = run.rollout([h]).histories[0]
-    wall = time.perf_counter() - start
-    return fmh.with_tensions(hyb, case_model(sea, "table").components()["mooring"]), wall
 
 
 def settings(pipe: HybridPipeline, dur: float, long_dur: float) -> dict[str, Any]:
     """What the results were computed with (seas, winds, partition, network)."""
     sea = lambda v: dict(zip(("hs", "tp", "seed", "wind_speed", "wind_seed"), v))  # noqa: E731
-    return {"dofs": DOFS, "dt": DT, "ramp": RAMP, "turbulence_intensity": TI,
+    return {"dofs": fmh.DOFS, "dt": fmh.DT, "ramp": fmh.RAMP, "turbulence_intensity": fmh.TI,
             "duration": dur, "long_duration": long_dur,
-            "train": {k: sea(v) for k, v in TRAIN.items()},
-            "held_out": {k: sea(v) for k, v in HELD.items()},
-            "long": {k: sea(v) for k, v in LONG.items()},
-            "partition": {"known": [*CANDIDATES, "linear_damping", "mooring (table)",
+            "train_seas": {k: sea(v) for k, v in fmh.TRAIN.items()},
+            "held_out_seas": {k: sea(v) for k, v in fmh.HELD.items()},
+            "long_sea": {k: sea(v) for k, v in fmh.LONG.items()},
+            "partition": {"known": [*fmh.CANDIDATES, "linear_damping", "mooring (table)",
                                     "rotor (this run's wind)"],
                           "network": "MoorDyn - quasi-static mooring + slow drift + drag",
                           "inputs": list(pipe.inputs_)},
-            "network": pipe.network_.get_params(), "mode": MODE}
+            "network": pipe.network_.get_params(), "mode": fmh.MODE}
 
 
 def ship(dest: Path, out: dict[str, Any], series: dict[str, xr.Dataset]) -> None:
@@ -202,26 +124,28 @@ def main(argv: list[str] | None = None) -> int:
     work = args.work / ("quick" if args.quick else "full")
     work.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    model = case_model(TRAIN["train1"], "moordyn")
-    refs = {n: cached(work, "moordyn", n, s, dur) for n, s in TRAIN.items()}
+    model = fmh.case_model(fmh.TRAIN["train1"], "moordyn")
+    refs = {n: cached(work, "moordyn", n, s, dur) for n, s in fmh.TRAIN.items()}
     _, pipe = train(work, refs, model)
     out: dict[str, Any] = {"held_out": {}, "prediction": fmh.prediction(pipe)}
     series = {}
-    for name, sea in HELD.items():
+    for name, sea in fmh.HELD.items():
         runs = {k: cached(work, k, name, sea, dur) for k in ("moordyn", "table", "linear")}
         runs["linear"] = fmh.with_tensions(runs["linear"],
-                                           case_model(sea, "table").components()["mooring"])
-        runs["hybrid"], wall = run_hybrid(pipe, runs["moordyn"], sea, model)
-        series[name] = fmh.series(runs, ramp=RAMP)
+                                           fmh.case_model(sea, "table").components()["mooring"])
+        runs["hybrid"], wall = fmh.run_hybrid(pipe.network_, runs["moordyn"], sea,
+                                                  corrections=pipe.corrections_)
+        series[name] = fmh.series(runs, ramp=fmh.RAMP)
         out["held_out"][name] = fmh.metrics(series[name])
         out["held_out"][name]["wall_s"] = {"hybrid": wall, **{
             k: float(runs[k].attrs.get("wall_s", np.nan)) for k in ("moordyn", "table",
                                                                     "linear")}}
         print(name, f"hybrid {wall:.1f} s wall", json.dumps(out["held_out"][name]["errors"]),
               flush=True)
-    long_ref = cached(work, "table", "long", LONG["long"], long_dur)
-    hyb, wall = run_hybrid(pipe, long_ref, LONG["long"], model)
-    out["long"] = fmh.long_run(hyb, long_ref, ramp=RAMP, wall=wall)
+    long_ref = cached(work, "table", "long", fmh.LONG["long"], long_dur)
+    hyb, wall = fmh.run_hybrid(pipe.network_, long_ref, fmh.LONG["long"],
+                                corrections=pipe.corrections_)
+    out["long"] = fmh.long_run(hyb, long_ref, ramp=fmh.RAMP, wall=wall)
     print(json.dumps(out["long"]), flush=True)
     out.update(settings(pipe, dur, long_dur))
     out["provenance"] = provenance("moordyn", "moorpy", "torch", "numpy")

@@ -19,15 +19,32 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import json
+import time
+from pathlib import Path
+
+import matplotlib.pyplot as plt
 import numpy as np
-import scipy.optimize
 import scipy.signal
 import xarray as xr
 
+from hybridwsi.casemodel import CaseModel, linear_components
+from hybridwsi.cummins.forcing import excitation
+from hybridwsi.diagnostic.partition import build_candidates
+from hybridwsi.files import DATA, read_netcdf
+from hybridwsi.forces.linear import mass_from
+from hybridwsi.history import make_history
 from hybridwsi.hydro import coefficients as cf
+from hybridwsi.report.plots import save
+from hybridwsi.surrogate.network import ForceNetwork
+from hybridwsi.surrogate.pipeline import HybridPipeline
+from hybridwsi.waves import JONSWAP
 
-__all__ = ["LOW_OMEGA", "MODELS", "linear_offset", "metrics", "psd", "series",
-           "with_tensions"]
+__all__ = ["LOW_OMEGA", "MODELS", "SHIPPED", "linear_offset", "load_shipped", "metrics", "psd",
+           "report_section", "series", "spectra", "spectra_figure", "with_tensions"]
+
+#: the results of scripts/oc3_moordyn_hybrid.py (``.json`` and ``.nc``)
+SHIPPED = DATA / "oc3_moordyn_hybrid"
 
 #: rad/s: the band of the slow-drift energy criterion (issue 29: "below 0.1 rad/s")
 LOW_OMEGA = 0.1
@@ -37,8 +54,112 @@ LABELS = {"linear": "linear", "table": "quasi-static (MoorPy table)",
           "moordyn": "MoorDyn-coupled reference", "hybrid": "hybrid"}
 #: Welch segment [s]: 3.4 surge periods of 124 s in a 1800 s record, 5 segments (50 % overlap)
 SEGMENT = 600.0
-#: the excerpt of the time series shipped per sea [s after the ramp]
-EXCERPT = 600.0
+#: rad/s: marked on the spectra (surge, heave and pitch natural frequencies of the linear
+#: system, docs/OC3_HYWIND.md "Natural frequencies")
+MARKS = {0.0506: "surge", 0.2038: "heave", 0.2123: "pitch"}
+
+
+# ------------------------------------------------------------------------------- the set-up
+DOFS = ("Surge", "Heave", "Pitch")
+DT = 0.1
+RAMP = 60.0
+TI = 0.1
+#: the known part of the partition besides the case's components (diagnostic candidates)
+CANDIDATES = ("hydrostatic", "added_mass_inf", "radiation_memory", "excitation")
+#: seas: Hs [m], Tp [s], wave seed, mean hub wind [m/s], wind seed. Training winds 7-9 m/s
+#: (below rated: region 2, positive aerodynamic damping); held-out seas AND winds between them
+TRAIN = {"train1": (4.0, 10.0, 1, 7.0, 1), "train2": (6.0, 12.0, 2, 9.0, 2),
+         "train3": (5.0, 11.0, 3, 8.0, 3)}
+HELD = {"held1": (4.5, 10.5, 101, 8.5, 101), "held2": (5.5, 11.5, 102, 7.5, 102)}
+LONG = {"long": (5.0, 11.0, 201, 8.0, 201)}
+#: the network: the case's [hybrid.network] (window 6 taps 0.5 s apart, η 0.5 s ahead)
+MODE = "corrected"
+#: epochs of the training (the case's 150 / 20 cost ~45 min here on 3 x 1800 s of data)
+NETWORK_EPOCHS = {"max_epochs": 60, "patience": 10}
+
+
+def case_model(sea: tuple, mooring: str, *, linear: bool = False) -> CaseModel:
+    """The OC3 model of one sea's wind: operating rotor, turbulent wind, slow drift, drag
+    (``linear``: no drag, no drift: the mooring is added as its linearisation)."""
+    _, _, _, wind, wseed = sea
+    forces = {"drift": not linear, "morison": not linear, **({"mooring": "none"} if linear
+                                                              else {})}
+    return CaseModel.build("oc3_hywind", dofs=DOFS, dt=DT, mooring=None if linear else mooring,
+                           overrides={
+                               "rotor": {"state": "operating", "wind_speed": wind,
+                                         "turbulence_intensity": TI, "wind_seed": wseed},
+                               "forces": forces})
+
+
+def jonswap(sea: tuple) -> JONSWAP:
+    hs, tp, seed = sea[:3]
+    return JONSWAP(hs=hs, tp=tp, seed=seed)
+
+
+def simulate(kind: str, sea: tuple, duration: float) -> xr.Dataset:
+    """One run: ``moordyn`` (the reference), ``table`` (quasi-static mooring, else the same),
+    ``linear`` (linearised mooring, no drag, no drift, the same rotor and wind)."""
+    if kind != "linear":
+        return case_model(sea, kind).simulate(duration=duration, dt=DT, wave=jonswap(sea),
+                                              ramp=RAMP)
+    model = case_model(sea, "none", linear=True)
+    lin = linear_components(model.case, DOFS)
+    z0 = linear_offset(model, lin[0].linear_coefficients(len(DOFS))[2])
+    return model.simulate(duration=duration, dt=DT, wave=jonswap(sea), ramp=RAMP,
+                          extra={"linear_mooring": lin[0]}, from_offset=False, z0=z0)
+
+
+def known_part(hist: xr.Dataset, sea: tuple, *, rotor: bool) -> list:
+    """The partition's known components on ``hist``: the candidates, the additional damping,
+    the quasi-static (tabulated) mooring and, with ``rotor``, this sea's rotor."""
+    comps = case_model(sea, "table").components()
+    known = [*build_candidates(hist, case_model(sea, "table").coeffs, CANDIDATES).values(),
+             comps["linear_damping"], comps["mooring"]]
+    return known + ([comps["rotor"]] if rotor else [])
+
+
+def prepared(hist: xr.Dataset, model: CaseModel) -> xr.Dataset:
+    """The history with the radiation state space its ``radiation_memory`` candidate reads
+    and ``F_norotor = F_tot − F_rotor``: the force the residual is taken of when the rotor is
+    known (its recorded force: each history has its own wind)."""
+    if "F_rotor" in hist:
+        hist = hist.assign(F_norotor=hist["F_tot"] - hist["F_rotor"])
+    hist.attrs["radiation_ss"] = json.dumps(model.radiation_ss.to_dict())
+    return hist
+
+
+def hybrid_case(sea: tuple, duration: float, network: ForceNetwork) -> xr.Dataset:
+    """What the hybrid needs to run in ``sea`` without a reference run: the time grid (the
+    network's η lead beyond ``duration``), the excitation and η of the sea, the case's mass,
+    and the static offset under the mean forces (rotor, drift) as its initial state (as the
+    reference starts there)."""
+    model = case_model(sea, "table")
+    wave = jonswap(sea)
+    offset = model.mean_offset(model.components(wave=wave, ramp=RAMP, sea=wave))
+    t = np.arange(int(round(duration / DT)) + 1 + network.spec_.lead) * DT
+    f_exc, eta = excitation(wave, model.coeffs, t, list(DOFS), RAMP)
+    z = np.broadcast_to(offset, (t.size, len(DOFS))).copy()
+    zero = np.zeros_like(z)
+    return make_history(t, z, zero, zero, forces={"F_exc": f_exc}, dof=list(DOFS),
+                        mass=mass_from(None, model.coeffs, list(DOFS)), check=False,
+                        extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
+
+
+def run_hybrid(network: ForceNetwork, ref: xr.Dataset, sea: tuple, *, corrections: int
+               ) -> tuple[xr.Dataset, float]:
+    """The hybrid on ``ref``'s sea and wind (its first window as the initial state; the rotor
+    of this wind known; ``ref`` a reference run or :func:`hybrid_case`) and its wall time [s]
+    (the known components built and the rollout), with the quasi-static line tensions along
+    its motion (:func:`with_tensions`)."""
+    model = case_model(sea, "table")
+    h = prepared(ref, model)
+    start = time.perf_counter()
+    run = HybridPipeline.from_network(network, known_part(h, sea, rotor=True),
+                                      mass=h["mass"].values, dt=DT, mode=MODE,
+                                      corrections=corrections)
+    hyb = run.rollout([h]).histories[0]
+    wall = time.perf_counter() - start
+    return with_tensions(hyb, model.components()["mooring"]), wall
 
 
 def linear_offset(model: Any, k_moor: np.ndarray) -> np.ndarray:
@@ -171,3 +292,104 @@ def long_run(hyb: xr.Dataset, ref: xr.Dataset, *, ramp: float, wall: float) -> d
                       "max_dev": float(np.max(np.abs(z - np.mean(z))))}
         out["hours"].append(row)
     return out
+
+
+# ------------------------------------------------------------------------------- the report
+def load_shipped(stem: Path = SHIPPED) -> tuple[dict[str, Any], xr.Dataset]:
+    """The shipped metrics (JSON) and held-out series (NetCDF, dims ``sea``, ``model``,
+    ``time``)."""
+    return (json.loads(Path(stem).with_suffix(".json").read_text()),
+            read_netcdf(Path(stem).with_suffix(".nc")))
+
+
+def sea_series(ds: xr.Dataset, sea: str) -> xr.Dataset:
+    """One held-out sea of the shipped series as :func:`series` returned it."""
+    one = ds.sel(sea=sea).drop_vars(["sea", "most_loaded_line"])
+    one.attrs["most_loaded_line"] = int(ds["most_loaded_line"].sel(sea=sea))
+    return one
+
+
+def table_markdown(res: Mapping[str, Any], sea: str) -> list[str]:
+    """RMS and max of surge, pitch and the most loaded line's fairlead tension per model, and
+    the hybrid's errors, for one held-out sea (Markdown lines)."""
+    m = res["held_out"][sea]
+    s = res["held_out_seas"][sea]
+    lines = [f"Held-out sea {sea}: JONSWAP Hs {s['hs']:g} m, Tp {s['tp']:g} s (seed "
+             f"{s['seed']}), wind {s['wind_speed']:g} m/s TI {res['turbulence_intensity']:g} "
+             f"(seed {s['wind_seed']}); after the {res['ramp']:g} s ramp. Most loaded line: "
+             f"{m['most_loaded_line']}.", "",
+             "| model | surge RMS / max [m] | pitch RMS / max [deg] | T_fairlead RMS / max [kN] "
+             "| surge energy < 0.1 rad/s [m²] |", "|---|---|---|---|---|"]
+    for name in MODELS:
+        st = m["stats"][name]
+        lines.append(
+            f"| {LABELS[name]} | {st['surge']['rms']:.2f} / {st['surge']['max_abs']:.2f} | "
+            f"{np.degrees(st['pitch']['rms']):.2f} / {np.degrees(st['pitch']['max_abs']):.2f} | "
+            f"{st['tension']['rms'] / 1e3:.1f} / {st['tension']['max'] / 1e3:.1f} | "
+            f"{m['low_energy'][name]:.3g} |")
+    lines += ["", "| vs the MoorDyn reference | surge | pitch | T_fairlead | low-frequency surge "
+              "energy |", "|---|---|---|---|---|"]
+    for name in ("linear", "table", "hybrid"):
+        e = m["errors"][name]
+        cell = lambda k: (f"{100 * e[k]['nrms']:.2f} % ({100 * e[k]['nrms_dynamic']:.1f} %)")  # noqa: E731
+        lines.append(f"| {LABELS[name]} | {cell('surge')} | {cell('pitch')} | "
+                     f"{cell('tension')} | {100 * e['low_energy']:+.1f} % |")
+    lines += ["", "Errors: RMS(x − x_ref)/RMS(x_ref) (in brackets: /std(x_ref), the "
+              "fluctuation alone)."]
+    return lines
+
+
+def spectra_figure(ds: xr.Dataset, sea: str, tp: float) -> plt.Figure:
+    """Log-log surge and pitch spectra of every model on one axis per DOF, with the
+    natural frequencies and the wave peak marked."""
+    sp = spectra(sea_series(ds, sea))
+    fig, axes = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
+    styles = {"linear": ":", "table": "--", "moordyn": "-", "hybrid": "-."}
+    for ax, key, unit in ((axes[0], "surge", "m² s/rad"), (axes[1], "pitch", "rad² s/rad")):
+        for name in sp["model"].values:
+            keep = sp["omega"].values > 0
+            ax.loglog(sp["omega"].values[keep], sp[f"S_{key}"].sel(model=name).values[keep],
+                      styles[str(name)], lw=1.2, label=LABELS[str(name)])
+        for w, label in {**MARKS, 2.0 * np.pi / tp: "wave peak"}.items():
+            ax.axvline(w, color="0.6", lw=0.8)
+            ax.text(w, 1.02, label, transform=ax.get_xaxis_transform(), fontsize=7,
+                    ha="center")
+        ax.axvspan(sp["omega"].values[1], LOW_OMEGA, color="0.9", zorder=0)
+        ax.set_ylabel(f"S_{key} [{unit}]")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].legend(fontsize=8, loc="lower left")
+    axes[-1].set_xlim(0.02, 2.0)
+    axes[-1].set_xlabel("ω [rad/s]")
+    fig.tight_layout()
+    return fig
+
+
+def report_section(folder: Path, stem: Path = SHIPPED) -> str:
+    """The report's design-fidelity hybrid: the table and ``folder/moordyn_hybrid_spectra.png``
+    of the first held-out sea, a line per other sea, from the shipped results (no MoorDyn)."""
+    res, ds = load_shipped(stem)
+    seas = list(res["held_out"])
+    first = seas[0]
+    fig = spectra_figure(ds, first, res["held_out_seas"][first]["tp"])
+    save(fig, Path(folder) / "moordyn_hybrid_spectra.png")
+    pred, long = res["prediction"], res["long"]
+    lines = ["### The hybrid on the MoorDyn-coupled reference (design fidelity)", "",
+             "Reference: Cummins (surge, heave, pitch) + MoorDyn + slow drift (Newman) + Morison "
+             "drag + the operating NREL 5-MW rotor in turbulent wind, JONSWAP seas "
+             f"({res['duration']:g} s each). The hybrid: the quasi-static mooring and the rotor "
+             "in the ODE, a network (inputs z, ż, η) for MoorDyn − quasi-static + drift + drag, "
+             f"trained on {len(res['train_seas'])} seas. Shipped results "
+             "(`hybridwsi/data/oc3_moordyn_hybrid.json/.nc`, `scripts/oc3_moordyn_hybrid.py`).",
+             "", *table_markdown(res, first), ""]
+    for sea in seas[1:]:
+        e = res["held_out"][sea]["errors"]["hybrid"]
+        lines.append(f"Held-out sea {sea}: hybrid surge {100 * e['surge']['nrms']:.2f} %, pitch "
+                     f"{100 * e['pitch']['nrms']:.2f} %, fairlead tension "
+                     f"{100 * e['tension']['nrms']:.2f} %, low-frequency surge energy "
+                     f"{100 * e['low_energy']:+.1f} %.")
+    lines += ["", f"Predicted {'stable' if pred['stable'] else 'UNSTABLE'} (spectral radius "
+              f"{pred['spectral_radius']:.6f} at Δt {pred['dt']:g} s); the "
+              f"{long['duration'] / 3600:.1f}-hour run is "
+              f"{'bounded' if long['finite'] else 'NOT finite'}.", "",
+              "![spectra](fowt/moordyn_hybrid_spectra.png)", ""]
+    return "\n".join(lines)
