@@ -52,11 +52,16 @@ LOW_OMEGA = 0.1
 MODELS = ("linear", "table", "moordyn", "hybrid")
 LABELS = {"linear": "linear", "table": "quasi-static (MoorPy table)",
           "moordyn": "MoorDyn-coupled reference", "hybrid": "hybrid"}
+#: units of the series
+UNITS = {"surge": "m", "heave": "m", "pitch": "rad", "tension": "N"}
 #: Welch segment [s]: 3.4 surge periods of 124 s in a 1800 s record, 5 segments (50 % overlap)
 SEGMENT = 600.0
 #: rad/s: marked on the spectra (surge, heave and pitch natural frequencies of the linear
 #: system, docs/OC3_HYWIND.md "Natural frequencies")
-MARKS = {0.0506: "surge", 0.2038: "heave", 0.2123: "pitch"}
+MARKS = {0.0506: ("surge (at rest)", "center"), 0.2038: ("heave", "right"),
+         0.2123: ("pitch", "left")}
+#: Welch segment of the figure [s]: finer in ω (0.0052 rad/s) to show the slow-drift band
+FIGURE_SEGMENT = 1200.0
 
 
 # ------------------------------------------------------------------------------- the set-up
@@ -199,18 +204,17 @@ def series(runs: Mapping[str, xr.Dataset], *, ramp: float) -> xr.Dataset:
         for key, dof in (("surge", "Surge"), ("heave", "Heave"), ("pitch", "Pitch")):
             data[key].append(np.asarray(h["z"].sel(dof=dof).values, float))
         data["tension"].append(np.asarray(h["T_fairlead"].isel(line=line).values, float))
-    units = {"surge": "m", "heave": "m", "pitch": "rad", "tension": "N"}
-    ds = xr.Dataset({k: (("model", "time"), np.stack(v), {"units": units[k]})
+    ds = xr.Dataset({k: (("model", "time"), np.stack(v), {"units": UNITS[k]})
                      for k, v in data.items()},
                     coords={"model": list(MODELS), "time": t})
     ds.attrs["most_loaded_line"] = line + 1
     return ds
 
 
-def psd(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def psd(x: np.ndarray, dt: float, segment: float = SEGMENT) -> tuple[np.ndarray, np.ndarray]:
     """One-sided spectrum of ``x`` about its mean, ``(ω [rad/s], S(ω) [x² s/rad])``
-    (Welch, Hann windows of :data:`SEGMENT` s, 50 % overlap; ∫S dω = var(x))."""
-    n = min(int(round(SEGMENT / dt)), len(x))
+    (Welch, Hann windows of ``segment`` [s], 50 % overlap; ∫S dω = var(x))."""
+    n = min(int(round(segment / dt)), len(x))
     f, s = scipy.signal.welch(np.asarray(x, float) - np.mean(x), fs=1.0 / dt, nperseg=n)
     return 2.0 * np.pi * f, s / (2.0 * np.pi)
 
@@ -251,15 +255,15 @@ def metrics(ds: xr.Dataset) -> dict[str, Any]:
     return out
 
 
-def spectra(ds: xr.Dataset) -> xr.Dataset:
+def spectra(ds: xr.Dataset, segment: float = SEGMENT) -> xr.Dataset:
     """Surge and pitch spectra (:func:`psd`) of every model (dims ``model``, ``omega``)."""
     t = np.asarray(ds["time"].values, float)
     dt = float(np.median(np.diff(t)))
     out = {}
     for k in ("surge", "pitch"):
-        rows = [psd(ds[k].sel(model=m).values, dt) for m in ds["model"].values]
+        rows = [psd(ds[k].sel(model=m).values, dt, segment) for m in ds["model"].values]
         out[f"S_{k}"] = (("model", "omega"), np.stack([r[1] for r in rows]),
-                         {"units": f"{ds[k].attrs['units']}^2 s/rad"})
+                         {"units": f"{UNITS[k]}^2 s/rad"})
     return xr.Dataset(out, coords={"model": ds["model"].values, "omega": rows[0][0]})
 
 
@@ -342,23 +346,28 @@ def table_markdown(res: Mapping[str, Any], sea: str) -> list[str]:
 def spectra_figure(ds: xr.Dataset, sea: str, tp: float) -> plt.Figure:
     """Log-log surge and pitch spectra of every model on one axis per DOF, with the
     natural frequencies and the wave peak marked."""
-    sp = spectra(sea_series(ds, sea))
+    sp = spectra(sea_series(ds, sea), FIGURE_SEGMENT)
+    keep = (sp["omega"].values > 0) & (sp["omega"].values <= 2.0)
+    w = sp["omega"].values[keep]
     fig, axes = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
     styles = {"linear": ":", "table": "--", "moordyn": "-", "hybrid": "-."}
     for ax, key, unit in ((axes[0], "surge", "m² s/rad"), (axes[1], "pitch", "rad² s/rad")):
+        top = 0.0
         for name in sp["model"].values:
-            keep = sp["omega"].values > 0
-            ax.loglog(sp["omega"].values[keep], sp[f"S_{key}"].sel(model=name).values[keep],
-                      styles[str(name)], lw=1.2, label=LABELS[str(name)])
-        for w, label in {**MARKS, 2.0 * np.pi / tp: "wave peak"}.items():
-            ax.axvline(w, color="0.6", lw=0.8)
-            ax.text(w, 1.02, label, transform=ax.get_xaxis_transform(), fontsize=7,
-                    ha="center")
-        ax.axvspan(sp["omega"].values[1], LOW_OMEGA, color="0.9", zorder=0)
+            y = sp[f"S_{key}"].sel(model=name).values[keep]
+            ax.loglog(w, y, styles[str(name)], lw=1.2, label=LABELS[str(name)])
+            top = max(top, float(y.max()))
+        ax.set_ylim(top * 1e-6, top * 3.0)
+        marks = {**MARKS, 2.0 * np.pi / tp: ("wave peak", "center")}
+        for omega, (label, align) in marks.items():
+            ax.axvline(omega, color="0.6", lw=0.8)
+            ax.text(omega, 1.02, label, transform=ax.get_xaxis_transform(), fontsize=7,
+                    ha=align)
+        ax.axvspan(w[0], LOW_OMEGA, color="0.92", zorder=0, label="ω < 0.1 rad/s")
         ax.set_ylabel(f"S_{key} [{unit}]")
         ax.grid(alpha=0.3, which="both")
     axes[0].legend(fontsize=8, loc="lower left")
-    axes[-1].set_xlim(0.02, 2.0)
+    axes[-1].set_xlim(w[0], 2.0)
     axes[-1].set_xlabel("ω [rad/s]")
     fig.tight_layout()
     return fig
