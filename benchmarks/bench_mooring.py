@@ -33,6 +33,16 @@ literal hour).
 on the wave kinematics, additional damping, the operating NREL 5-MW rotor at rated (11.4 m/s,
 turbulence intensity 0.1, Kaimal), Newman's slow drift — in a JONSWAP sea (Hs 6 m, Tp 12 s,
 200 components), starting from the mean offset; MoorDyn against the tabulated mooring.
+
+``--hybrid``: the hybrid of ``scripts/oc3_moordyn_hybrid.py`` (the shipped network
+``hybridwsi/data/oc3_moordyn_hybrid_network``; the quasi-static mooring and the rotor in the
+ODE, the network in the loop, ``corrected`` coupling) against its MoorDyn-coupled reference
+on the same sea and wind (the first held-out sea: Hs 4.5 m, Tp 10.5 s, 8.5 m/s, TI 0.1;
+Surge, Heave, Pitch; Δt 0.1 s), side by side, alternating ``--repeat`` times (≥ 3). The
+hybrid's time includes what it needs besides the rollout (the sea's excitation, the mean
+offset, the known components); the reference's MoorDyn's static initialisation. Prints both
+wall times, the median ratio (target ≥ 50×) and the hybrid's RMS surge and pitch error
+against the reference of the same sample.
 """
 
 from __future__ import annotations
@@ -147,6 +157,46 @@ def design_cost(duration: float, repeat: int) -> None:
              duration, repeat, f"dt {dt} s; components {', '.join(comps)}; {DESIGN}")
 
 
+def hybrid_cost(duration: float, repeat: int) -> None:
+    """``--hybrid``: the hybrid against the MoorDyn-coupled reference (module doc)."""
+    from hybridwsi.report import fowt_moordyn_hybrid as fmh
+    from hybridwsi.surrogate.network import ForceNetwork
+
+    net = ForceNetwork.load(fmh.NETWORK)
+    corrections = fmh.load_shipped()[0]["prediction"]["corrections"]  # the shipped runs'
+    name, sea = next(iter(fmh.HELD.items()))
+
+    def run_hybrid():
+        return fmh.run_hybrid(net, fmh.hybrid_case(sea, duration, net), sea,
+                              corrections=corrections)[0]
+
+    run_hybrid()  # warm-up (Numba kernels, torch)
+    walls: dict[str, list[float]] = {"moordyn": [], "hybrid": []}
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        ref = fmh.simulate("moordyn", sea, duration)
+        walls["moordyn"].append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        hyb = run_hybrid()
+        walls["hybrid"].append(time.perf_counter() - t0)
+    ratios = np.array(walls["moordyn"]) / np.array(walls["hybrid"])
+    t = hyb["time"].values
+    err = {d: float(np.sqrt(np.mean((hyb["z"].sel(dof=d).values
+                                     - ref["z"].sel(dof=d).sel(time=t, method="nearest").values)
+                                    ** 2) / np.mean(ref["z"].sel(dof=d).values ** 2)))
+           for d in ("Surge", "Pitch")}
+    print(f"{duration:.0f} s simulated, sea {name} {sea}, {', '.join(fmh.DOFS)}, dt {fmh.DT} s, "
+          f"{repeat} alternating samples")
+    for k, v in walls.items():
+        print(f"{k:8s}: median {np.median(v):7.2f} s wall (min {min(v):.2f}, max {max(v):.2f})"
+              f" = {duration / np.median(v):7.1f}x real time")
+    print(f"ratio MoorDyn-coupled / hybrid: median {np.median(ratios):.1f}x (min "
+          f"{ratios.min():.1f}, max {ratios.max():.1f}); target >= 50x: "
+          f"{'met' if np.median(ratios) >= 50 else 'NOT met'}")
+    print("hybrid vs reference, RMS error / RMS: "
+          + ", ".join(f"{d} {100 * e:.2f} %" for d, e in err.items()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=2000, help="interpolant calls per run")
@@ -157,9 +207,15 @@ def main() -> None:
     parser.add_argument("--design", action="store_true",
                         help="the MoorDyn-coupled design-fidelity case run (rotor, drift, "
                              "drag) against the same with the tabulated mooring")
+    parser.add_argument("--hybrid", action="store_true",
+                        help="the hybrid of scripts/oc3_moordyn_hybrid.py against its "
+                             "MoorDyn-coupled reference on the same sea")
     parser.add_argument("--duration", type=float, default=600.0,
-                        help="--moordyn/--design: simulated time per sample [s]")
+                        help="--moordyn/--design/--hybrid: simulated time per sample [s]")
     args = parser.parse_args()
+    if args.hybrid:
+        hybrid_cost(args.duration, max(args.repeat, 3))
+        return
     if args.moordyn or args.design:
         (design_cost if args.design else moordyn_cost)(args.duration, max(args.repeat, 5))
         return

@@ -12,13 +12,16 @@ network (inputs z, ż, η), trained through :class:`hybridwsi.surrogate.pipeline
 The rotor is known, so each history's recorded rotor force is subtracted from the force the
 network's residual is taken of, and each run's rollout carries the rotor of its own wind.
 
-Resumable: every simulated history goes to ``WORK/<model>_<sea>.nc`` (atomic) as soon as it is
-computed and a rerun only computes what is missing; the network to ``WORK/network.pt/.json``.
-The results (metrics, spectra, time-series excerpts) go to
-``src/hybridwsi/data/oc3_moordyn_hybrid.{json,nc}``.
+Resumable: every simulated history goes to ``WORK/full/<model>_<sea>.nc`` (atomic) as soon as
+it is computed and a rerun only computes what is missing; the network to
+``WORK/full/network.pt/.json`` (and, when trained, ``hybridwsi/data/oc3_moordyn_hybrid_network``).
+The results go to ``src/hybridwsi/data/oc3_moordyn_hybrid.json`` (metrics per held-out sea,
+the stability prediction, the 3-hour run, settings, provenance) and ``.nc`` (surge, heave,
+pitch and the most loaded line's fairlead tension of every model after the ramp, float32,
+compressed; the report's table and spectra are computed from it).
 
-    OPENBLAS_NUM_THREADS=1 PYTHONPATH=src nice -n 5 python scripts/oc3_moordyn_hybrid.py \\
-        --work /tmp/oc3_moordyn_hybrid
+    OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src nice -n 5 \\
+        python scripts/oc3_moordyn_hybrid.py --work /tmp/oc3_moordyn_hybrid
 
 ``--quick``: 300 s seas, a 600 s long run, nothing shipped (a look at the pipeline).
 """
@@ -43,8 +46,10 @@ from hybridwsi.surrogate.pipeline import HybridPipeline
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIP = ROOT / "src" / "hybridwsi" / "data" / "oc3_moordyn_hybrid"
-NETWORK = SHIP.parent / "oc3_moordyn_hybrid_network"  # .pt/.json: the benchmark's
-#: epochs of the training (the case's 150 / 20 cost ~45 min here on 3 x 1800 s of data)
+#: epochs of the training: fewer than the case's 150 / 20, chosen before the cost was known
+#: (a smoke run with torch's default threads on the loaded machine suggested ~45 min); with
+#: OMP_NUM_THREADS=1 the 60 epochs took < 85 s and the validation loss was still falling at
+#: the 60th (docs/OC3_HYWIND.md)
 NETWORK_EPOCHS = {"max_epochs": 60, "patience": 10}
 
 
@@ -64,8 +69,7 @@ def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> tuple[Fo
     """The network through the pipeline (resumed from ``work/network.*`` when there)."""
     hs = [fmh.prepared(h, model) for h in refs.values()]
     known = fmh.known_part(hs[0], fmh.TRAIN["train1"], rotor=False)
-    # the case's [hybrid.network] with fewer epochs: 3 x 1800 s of data make ~100 batches an
-    # epoch, and the training must fit the shared 2-core machine (NETWORK_EPOCHS)
+    # the case's [hybrid.network] with fewer epochs (NETWORK_EPOCHS)
     net_cfg = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS}
     pipe = HybridPipeline("moordyn-table+drift+drag", inputs=("z", "zdot", "eta"), known=known,
                           mode=fmh.MODE, network=net_cfg, force="F_norotor", allow_unstable=True,
@@ -74,13 +78,14 @@ def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> tuple[Fo
     if (work / "network.pt").is_file():
         net = ForceNetwork.load(path)
         pipe = HybridPipeline.from_network(net, known, mass=hs[0]["mass"].values, dt=fmh.DT,
-                                           mode=fmh.MODE, corrections=2)
+                                           mode=fmh.MODE)
+        pipe.corrections = None  # as fit() does: the number from the network's prediction
         pipe._predict(hs)
         return net, pipe
     start = time.perf_counter()
     pipe.fit(hs, model.coeffs)
     pipe.network_.save(path)
-    pipe.network_.save(NETWORK)
+    pipe.network_.save(fmh.NETWORK)
     print(f"trained in {time.perf_counter() - start:.0f} s", flush=True)
     return pipe.network_, pipe
 
@@ -149,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps(out["long"]), flush=True)
     out.update(settings(pipe, dur, long_dur))
     out["provenance"] = provenance("moordyn", "moorpy", "torch", "numpy")
-    out["command"] = ("OPENBLAS_NUM_THREADS=1 PYTHONPATH=src nice -n 5 python "
+    out["command"] = ("OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src nice -n 5 python "
                       "scripts/oc3_moordyn_hybrid.py --work WORK" + " --quick" * args.quick)
     out["wall_time_s"] = time.perf_counter() - t0
     dest = (work / "oc3_moordyn_hybrid") if args.quick else SHIP

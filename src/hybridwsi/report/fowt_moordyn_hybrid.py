@@ -43,8 +43,10 @@ from hybridwsi.waves import JONSWAP
 __all__ = ["LOW_OMEGA", "MODELS", "SHIPPED", "linear_offset", "load_shipped", "metrics", "psd",
            "report_section", "series", "spectra", "spectra_figure", "with_tensions"]
 
-#: the results of scripts/oc3_moordyn_hybrid.py (``.json`` and ``.nc``)
+#: the results of scripts/oc3_moordyn_hybrid.py (``.json`` and ``.nc``) and its network
+#: (``.pt`` and ``.json``, :meth:`ForceNetwork.load`)
 SHIPPED = DATA / "oc3_moordyn_hybrid"
+NETWORK = DATA / "oc3_moordyn_hybrid_network"
 
 #: rad/s: the band of the slow-drift energy criterion (issue 29: "below 0.1 rad/s")
 LOW_OMEGA = 0.1
