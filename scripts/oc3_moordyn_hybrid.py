@@ -65,32 +65,30 @@ def cached(work: Path, kind: str, name: str, sea: tuple, duration: float) -> xr.
     return read_netcdf(path)
 
 
-def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> tuple[ForceNetwork, Any]:
-    """The network through the pipeline (resumed from ``work/network.*`` when there)."""
-    hs = [fmh.prepared(h, model) for h in refs.values()]
-    known = fmh.known_part(hs[0], fmh.TRAIN["train1"], rotor=False)
-    # the case's [hybrid.network] with fewer epochs (NETWORK_EPOCHS)
+def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: str
+          ) -> HybridPipeline:
+    """The network of ``partition`` through the pipeline (resumed from
+    ``work/network_<partition>.*`` when there); each history prepared with its own wind."""
+    hs = [fmh.prepared(h, fmh.case_model(fmh.TRAIN[n], "table")) for n, h in refs.items()]
+    known = fmh.known_part(hs[0], model, partition, rotor=False)
     net_cfg = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS}
-    pipe = HybridPipeline("moordyn-table+drift+drag", inputs=("z", "zdot", "eta"), known=known,
-                          mode=fmh.MODE, network=net_cfg, force="F_norotor", allow_unstable=True,
-                          progress=False)
-    path = work / "network"
-    if (work / "network.pt").is_file():
-        net = ForceNetwork.load(path)
-        pipe = HybridPipeline.from_network(net, known, mass=hs[0]["mass"].values, dt=fmh.DT,
-                                           mode=fmh.MODE)
+    pipe = HybridPipeline(partition, inputs=("z", "zdot", "eta"), known=known, mode=fmh.MODE,
+                          network=net_cfg, force=f"F_{partition}", allow_unstable=True)
+    path = work / f"network_{partition}"
+    if path.with_suffix(".pt").is_file():
+        pipe = HybridPipeline.from_network(ForceNetwork.load(path), known,
+                                           mass=hs[0]["mass"].values, dt=fmh.DT, mode=fmh.MODE)
         pipe.corrections = None  # as fit() does: the number from the network's prediction
-        pipe._predict(hs)
-        return net, pipe
+        return pipe._predict(hs)
     start = time.perf_counter()
     pipe.fit(hs, model.coeffs)
     pipe.network_.save(path)
-    pipe.network_.save(fmh.NETWORK)
-    print(f"trained in {time.perf_counter() - start:.0f} s", flush=True)
-    return pipe.network_, pipe
+    pipe.network_.save(fmh.NETWORKS[partition])
+    print(f"{partition} trained in {time.perf_counter() - start:.0f} s", flush=True)
+    return pipe
 
 
-def settings(pipe: HybridPipeline, dur: float, long_dur: float) -> dict[str, Any]:
+def settings(pipes: dict[str, HybridPipeline], dur: float, long_dur: float) -> dict[str, Any]:
     """What the results were computed with (seas, winds, partition, network)."""
     sea = lambda v: dict(zip(("hs", "tp", "seed", "wind_speed", "wind_seed"), v))  # noqa: E731
     return {"dofs": fmh.DOFS, "dt": fmh.DT, "ramp": fmh.RAMP, "turbulence_intensity": fmh.TI,
@@ -98,11 +96,11 @@ def settings(pipe: HybridPipeline, dur: float, long_dur: float) -> dict[str, Any
             "train_seas": {k: sea(v) for k, v in fmh.TRAIN.items()},
             "held_out_seas": {k: sea(v) for k, v in fmh.HELD.items()},
             "long_sea": {k: sea(v) for k, v in fmh.LONG.items()},
-            "partition": {"known": [*fmh.CANDIDATES, "linear_damping", "mooring (table)",
-                                    "rotor (this run's wind)"],
-                          "network": "MoorDyn - quasi-static mooring + slow drift + drag",
-                          "inputs": list(pipe.inputs_)},
-            "network": pipe.network_.get_params(), "mode": fmh.MODE}
+            "partitions": {k: {"known": [c.describe() for c in p.known_],
+                               "network": fmh.PARTITIONS[k], "inputs": list(p.inputs_),
+                               "network_settings": p.network_.get_params()}
+                           for k, p in pipes.items()},
+            "mode": fmh.MODE}
 
 
 def ship(dest: Path, out: dict[str, Any], series: dict[str, xr.Dataset]) -> None:
@@ -129,30 +127,32 @@ def main(argv: list[str] | None = None) -> int:
     work = args.work / ("quick" if args.quick else "full")
     work.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    model = fmh.case_model(fmh.TRAIN["train1"], "moordyn")
     refs = {n: cached(work, "moordyn", n, s, dur) for n, s in fmh.TRAIN.items()}
-    _, pipe = train(work, refs, model)
-    out: dict[str, Any] = {"held_out": {}, "prediction": fmh.prediction(pipe)}
+    model = fmh.case_model(fmh.TRAIN["train1"], "table")
+    pipes = {k: train(work, refs, model, k) for k in fmh.PARTITIONS}
+    out: dict[str, Any] = {"held_out": {}, "long": {},
+                           "prediction": {k: fmh.prediction(p) for k, p in pipes.items()}}
     series = {}
     for name, sea in fmh.HELD.items():
         runs = {k: cached(work, k, name, sea, dur) for k in ("moordyn", "table", "linear")}
-        runs["linear"] = fmh.with_tensions(runs["linear"],
-                                           fmh.case_model(sea, "table").components()["mooring"])
-        runs["hybrid"], wall = fmh.run_hybrid(pipe.network_, runs["moordyn"], sea,
-                                                  corrections=pipe.corrections_)
+        model = fmh.case_model(sea, "table")
+        runs["linear"] = fmh.with_tensions(runs["linear"], model.components()["mooring"])
+        walls = {k: float(runs[k].attrs.get("wall_s", np.nan)) for k in runs}
+        for k, pipe in pipes.items():
+            runs[k], walls[k] = fmh.run_hybrid(pipe.network_, runs["moordyn"], model, k,
+                                               corrections=pipe.corrections_)
         series[name] = fmh.series(runs, ramp=fmh.RAMP)
-        out["held_out"][name] = fmh.metrics(series[name])
-        out["held_out"][name]["wall_s"] = {"hybrid": wall, **{
-            k: float(runs[k].attrs.get("wall_s", np.nan)) for k in ("moordyn", "table",
-                                                                    "linear")}}
-        print(name, f"hybrid {wall:.1f} s wall", json.dumps(out["held_out"][name]["errors"]),
-              flush=True)
+        out["held_out"][name] = {**fmh.metrics(series[name]), "wall_s": walls}
+        print(name, json.dumps(walls), json.dumps({k: out["held_out"][name]["errors"][k]
+                                                   for k in fmh.PARTITIONS}), flush=True)
     long_ref = cached(work, "table", "long", fmh.LONG["long"], long_dur)
-    hyb, wall = fmh.run_hybrid(pipe.network_, long_ref, fmh.LONG["long"],
-                                corrections=pipe.corrections_)
-    out["long"] = fmh.long_run(hyb, long_ref, ramp=fmh.RAMP, wall=wall)
+    model = fmh.case_model(fmh.LONG["long"], "table")
+    for k, pipe in pipes.items():
+        hyb, wall = fmh.run_hybrid(pipe.network_, long_ref, model, k,
+                                   corrections=pipe.corrections_)
+        out["long"][k] = fmh.long_run(hyb, long_ref, ramp=fmh.RAMP, wall=wall)
     print(json.dumps(out["long"]), flush=True)
-    out.update(settings(pipe, dur, long_dur))
+    out.update(settings(pipes, dur, long_dur))
     out["provenance"] = provenance("moordyn", "moorpy", "torch", "numpy")
     out["command"] = ("OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src nice -n 5 python "
                       "scripts/oc3_moordyn_hybrid.py --work WORK" + " --quick" * args.quick)

@@ -63,13 +63,14 @@ def test_errors_independently(shipped):
         one = fmh.sea_series(ds, sea)
         dt = float(np.diff(one["time"].values[:2])[0])
         ref = {k: one[k].sel(model="moordyn").values.astype(float) for k in ("surge", "pitch")}
-        hyb = {k: one[k].sel(model="hybrid").values.astype(float) for k in ("surge", "pitch")}
-        for k in ref:
-            e = np.sqrt(np.sum((hyb[k] - ref[k]) ** 2) / np.sum(ref[k] ** 2))
-            assert e == pytest.approx(want["errors"]["hybrid"][k]["nrms"], rel=1e-3)
-        ratio = (_lowpass_variance(hyb["surge"], dt, fmh.LOW_OMEGA)
-                 / _lowpass_variance(ref["surge"], dt, fmh.LOW_OMEGA) - 1.0)
-        assert ratio == pytest.approx(want["errors"]["hybrid"]["low_energy"], abs=0.05)
+        for model in fmh.PARTITIONS:
+            hyb = {k: one[k].sel(model=model).values.astype(float) for k in ("surge", "pitch")}
+            for k in ref:
+                e = np.sqrt(np.sum((hyb[k] - ref[k]) ** 2) / np.sum(ref[k] ** 2))
+                assert e == pytest.approx(want["errors"][model][k]["nrms"], rel=1e-3)
+            ratio = (_lowpass_variance(hyb["surge"], dt, fmh.LOW_OMEGA)
+                     / _lowpass_variance(ref["surge"], dt, fmh.LOW_OMEGA) - 1.0)
+            assert ratio == pytest.approx(want["errors"][model]["low_energy"], abs=0.05)
 
 
 def test_done_means_on_the_shipped_results(shipped):
@@ -78,18 +79,21 @@ def test_done_means_on_the_shipped_results(shipped):
     energy below 0.1 rad/s within 10 %; predicted stable and bounded over 3 hours."""
     res, _ = shipped
     for sea, m in res["held_out"].items():
-        e = m["errors"]["hybrid"]
-        assert e["surge"]["nrms"] <= 0.03 and e["pitch"]["nrms"] <= 0.03, sea
-        assert e["tension"]["nrms"] <= 0.05, sea
-        assert abs(e["low_energy"]) <= 0.10, sea
-    assert res["prediction"]["stable"] and res["long"]["finite"]
-    assert res["long"]["duration"] >= 10800.0 - 1.0
-    for hour in res["long"]["hours"]:  # bounded: the hybrid's spread near the quasi-static run's
-        for d, v in hour.items():
-            assert 0.5 < v["std"] / v["std_table"] < 1.5, d
+        for k in fmh.PARTITIONS:
+            e = m["errors"][k]
+            assert e["surge"]["nrms"] <= 0.03 and e["pitch"]["nrms"] <= 0.03, (sea, k)
+            assert e["tension"]["nrms"] <= 0.05, (sea, k)
+            assert abs(e["low_energy"]) <= 0.10, (sea, k)
+    for k in fmh.PARTITIONS:
+        long = res["long"][k]
+        assert res["prediction"][k]["stable"] and long["finite"], k
+        assert long["duration"] >= 10800.0 - 1.0
+        for hour in long["hours"]:  # bounded: the hybrid's spread near the quasi-static run's
+            for d, v in hour.items():
+                assert 0.5 < v["std"] / v["std_table"] < 1.5, (k, d)
 
 
 def test_report_section_from_the_file(tmp_path):
     text = fmh.report_section(tmp_path)
-    assert "MoorDyn-coupled reference" in text and "| hybrid |" in text
+    assert all(f"| {fmh.LABELS[k]} |" in text for k in fmh.MODELS)
     assert (tmp_path / "moordyn_hybrid_spectra.png").stat().st_size > 10_000

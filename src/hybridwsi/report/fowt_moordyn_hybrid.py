@@ -32,7 +32,8 @@ from hybridwsi.casemodel import CaseModel, linear_components
 from hybridwsi.cummins.forcing import excitation
 from hybridwsi.diagnostic.partition import build_candidates
 from hybridwsi.files import DATA, read_netcdf
-from hybridwsi.forces.linear import mass_from
+from hybridwsi.forces.external import PrescribedForce
+from hybridwsi.forces.linear import LinearDamping, mass_from
 from hybridwsi.history import make_history
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.report.plots import save
@@ -46,14 +47,17 @@ __all__ = ["LOW_OMEGA", "MODELS", "SHIPPED", "linear_offset", "load_shipped", "m
 #: the results of scripts/oc3_moordyn_hybrid.py (``.json`` and ``.nc``) and its network
 #: (``.pt`` and ``.json``, :meth:`ForceNetwork.load`)
 SHIPPED = DATA / "oc3_moordyn_hybrid"
-NETWORK = DATA / "oc3_moordyn_hybrid_network"
+NETWORKS = {"hybrid": DATA / "oc3_moordyn_hybrid_network",
+            "hybrid_lin": DATA / "oc3_moordyn_hybrid_lin_network"}
 
 #: rad/s: the band of the slow-drift energy criterion (issue 29: "below 0.1 rad/s")
 LOW_OMEGA = 0.1
 #: the models of the table and the spectra, in this order
-MODELS = ("linear", "table", "moordyn", "hybrid")
+MODELS = ("linear", "table", "moordyn", "hybrid", "hybrid_lin")
 LABELS = {"linear": "linear", "table": "quasi-static (MoorPy table)",
-          "moordyn": "MoorDyn-coupled reference", "hybrid": "hybrid"}
+          "moordyn": "MoorDyn-coupled reference",
+          "hybrid": "hybrid (quasi-static mooring + rotor known)",
+          "hybrid_lin": "hybrid (linear known part, compiled)"}
 #: units of the series
 UNITS = {"surge": "m", "heave": "m", "pitch": "rad", "tension": "N"}
 #: Welch segment [s]: 3.4 surge periods of 124 s in a 1800 s record, 5 segments (50 % overlap)
@@ -79,10 +83,18 @@ TRAIN = {"train1": (4.0, 10.0, 1, 7.0, 1), "train2": (6.0, 12.0, 2, 9.0, 2),
          "train3": (5.0, 11.0, 3, 8.0, 3)}
 HELD = {"held1": (4.5, 10.5, 101, 8.5, 101), "held2": (5.5, 11.5, 102, 7.5, 102)}
 LONG = {"long": (5.0, 11.0, 201, 8.0, 201)}
-#: the network: the case's [hybrid.network] (window 6 taps 0.5 s apart, η 0.5 s ahead)
+#: the coupling of the network (the case's [hybrid] mode)
 MODE = "corrected"
-#: epochs of the training (the case's 150 / 20 cost ~45 min here on 3 x 1800 s of data)
-NETWORK_EPOCHS = {"max_epochs": 60, "patience": 10}
+#: the two partitions (model name -> what the network learns; docs/OC3_HYWIND.md):
+#: ``hybrid`` the diagnostic's recommendation, the quasi-static mooring and the rotor in the
+#: ODE (NumPy stepper: both are nonlinear components); ``hybrid_lin`` everything known linear
+#: (the mooring linearised about rest, the rotor's wind force as a time series and its
+#: aerodynamic damping at the mean wind), so the rollout runs in the compiled loop
+PARTITIONS = {
+    "hybrid": "MoorDyn - quasi-static mooring + slow drift + drag",
+    "hybrid_lin": "MoorDyn + K z (its linearisation about rest removed) + slow drift + drag + "
+                  "the rotor's force beyond F(U(t)) - B_aero zdot",
+}
 
 
 def case_model(sea: tuple, mooring: str, *, linear: bool = False) -> CaseModel:
@@ -116,33 +128,54 @@ def simulate(kind: str, sea: tuple, duration: float) -> xr.Dataset:
                           extra={"linear_mooring": lin[0]}, from_offset=False, z0=z0)
 
 
-def known_part(hist: xr.Dataset, sea: tuple, *, rotor: bool) -> list:
-    """The partition's known components on ``hist``: the candidates, the additional damping,
-    the quasi-static (tabulated) mooring and, with ``rotor``, this sea's rotor."""
-    comps = case_model(sea, "table").components()
-    known = [*build_candidates(hist, case_model(sea, "table").coeffs, CANDIDATES).values(),
-             comps["linear_damping"], comps["mooring"]]
-    return known + ([comps["rotor"]] if rotor else [])
+def known_part(hist: xr.Dataset, model: CaseModel, partition: str, *, rotor: bool) -> list:
+    """The known components of ``partition`` (:data:`PARTITIONS`) on ``hist``: the
+    candidates, the additional damping and the mooring (``hybrid``: the quasi-static
+    tabulated one; ``hybrid_lin``: linearised about rest, −K z) and, with ``rotor``, the rotor
+    of ``model``'s wind (``hybrid``: the operating rotor itself; ``hybrid_lin``: its force in
+    the wind alone, ``F_rotor_wind`` of the history, and its damping at the mean wind)."""
+    comps = model.components()
+    known = [*build_candidates(hist, model.coeffs, CANDIDATES).values(),
+             comps["linear_damping"]]
+    if partition == "hybrid":
+        return known + [comps["mooring"]] + ([comps["rotor"]] if rotor else [])
+    known.append(linear_components(model.case, DOFS)[0])
+    if rotor:
+        known += [PrescribedForce("F_rotor_wind"),
+                  LinearDamping(comps["rotor"].linear_coefficients(len(DOFS))[1])]
+    return known
 
 
 def prepared(hist: xr.Dataset, model: CaseModel) -> xr.Dataset:
-    """The history with the radiation state space its ``radiation_memory`` candidate reads
-    and ``F_norotor = F_tot − F_rotor``: the force the residual is taken of when the rotor is
-    known (its recorded force: each history has its own wind)."""
+    """The history with the radiation state space its ``radiation_memory`` candidate reads,
+    ``F_rotor_wind`` (the rotor's force in the wind with the hub at rest; time only) and, for
+    a reference run, the forces the residual of each partition is taken of when its rotor
+    model is known: ``F_hybrid = F_tot − F_rotor`` (the recorded rotor force) and
+    ``F_hybrid_lin = F_tot − (F_rotor_wind − B_aero ż)`` — each history its own wind."""
+    rotor = model.components()["rotor"]
+    t = np.asarray(hist["time"].values, float)
+    f_wind = rotor._wrench(rotor.wind.speed(t), t)
+    new = {"F_rotor_wind": f_wind}
     if "F_rotor" in hist:
-        hist = hist.assign(F_norotor=hist["F_tot"] - hist["F_rotor"])
+        b = rotor.linear_coefficients(len(DOFS))[1]
+        f_tot = np.asarray(hist["F_tot"].values, float)
+        new["F_hybrid"] = f_tot - np.asarray(hist["F_rotor"].values, float)
+        new["F_hybrid_lin"] = f_tot - f_wind + np.asarray(hist["zdot"].values, float) @ b.T
+    hist = hist.assign({k: (("time", "dof"), v, {"units": "N, N m"}) for k, v in new.items()})
     hist.attrs["radiation_ss"] = json.dumps(model.radiation_ss.to_dict())
     return hist
 
 
-def hybrid_case(sea: tuple, duration: float, network: ForceNetwork) -> xr.Dataset:
-    """What the hybrid needs to run in ``sea`` without a reference run: the time grid (the
-    network's η lead beyond ``duration``), the excitation and η of the sea, the case's mass,
-    and the static offset under the mean forces (rotor, drift) as its initial state (as the
-    reference starts there)."""
-    model = case_model(sea, "table")
+def hybrid_case(sea: tuple, duration: float, network: ForceNetwork, model: CaseModel
+                ) -> xr.Dataset:
+    """What the hybrid needs to run in ``sea`` without a reference run (``model``: the
+    sea's :func:`case_model` with the table mooring, built once like the network): the time
+    grid (the network's η lead beyond ``duration``), the excitation and η, the case's mass,
+    and as the initial state the static offset under the rotor's mean force (the reference
+    starts from it with the drift's mean too: a transient of the slow drift's mean)."""
     wave = jonswap(sea)
-    offset = model.mean_offset(model.components(wave=wave, ramp=RAMP, sea=wave))
+    comps = model.components()
+    offset = model.mean_offset({"mooring": comps["mooring"], "rotor": comps["rotor"]})
     t = np.arange(int(round(duration / DT)) + 1 + network.spec_.lead) * DT
     f_exc, eta = excitation(wave, model.coeffs, t, list(DOFS), RAMP)
     z = np.broadcast_to(offset, (t.size, len(DOFS))).copy()
@@ -152,16 +185,15 @@ def hybrid_case(sea: tuple, duration: float, network: ForceNetwork) -> xr.Datase
                         extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
 
 
-def run_hybrid(network: ForceNetwork, ref: xr.Dataset, sea: tuple, *, corrections: int
-               ) -> tuple[xr.Dataset, float]:
-    """The hybrid on ``ref``'s sea and wind (its first window as the initial state; the rotor
-    of this wind known; ``ref`` a reference run or :func:`hybrid_case`) and its wall time [s]
-    (the known components built and the rollout), with the quasi-static line tensions along
-    its motion (:func:`with_tensions`)."""
-    model = case_model(sea, "table")
-    h = prepared(ref, model)
+def run_hybrid(network: ForceNetwork, ref: xr.Dataset, model: CaseModel, partition: str, *,
+               corrections: int) -> tuple[xr.Dataset, float]:
+    """The hybrid ``partition`` on ``ref``'s sea and ``model``'s wind (``ref``'s first window
+    as the initial state; ``ref`` a reference run or :func:`hybrid_case`) and its wall time
+    [s] (the wind's rotor force, the known components and the rollout), with the
+    quasi-static line tensions along its motion (:func:`with_tensions`)."""
     start = time.perf_counter()
-    run = HybridPipeline.from_network(network, known_part(h, sea, rotor=True),
+    h = prepared(ref, model)
+    run = HybridPipeline.from_network(network, known_part(h, model, partition, rotor=True),
                                       mass=h["mass"].values, dt=DT, mode=MODE,
                                       corrections=corrections)
     hyb = run.rollout([h]).histories[0]
@@ -335,7 +367,7 @@ def table_markdown(res: Mapping[str, Any], sea: str) -> list[str]:
             f"{m['low_energy'][name]:.3g} |")
     lines += ["", "| vs the MoorDyn reference | surge | pitch | T_fairlead | low-frequency surge "
               "energy |", "|---|---|---|---|---|"]
-    for name in ("linear", "table", "hybrid"):
+    for name in (n for n in MODELS if n != "moordyn"):
         e = m["errors"][name]
         cell = lambda k: (f"{100 * e[k]['nrms']:.2f} % ({100 * e[k]['nrms_dynamic']:.1f} %)")  # noqa: E731
         lines.append(f"| {LABELS[name]} | {cell('surge')} | {cell('pitch')} | "
@@ -352,7 +384,7 @@ def spectra_figure(ds: xr.Dataset, sea: str, tp: float) -> plt.Figure:
     keep = (sp["omega"].values > 0) & (sp["omega"].values <= 2.0)
     w = sp["omega"].values[keep]
     fig, axes = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
-    styles = {"linear": ":", "table": "--", "moordyn": "-", "hybrid": "-."}
+    styles = {"linear": ":", "table": "--", "moordyn": "-", "hybrid": "-.", "hybrid_lin": ":"}
     for ax, key, unit in ((axes[0], "surge", "m² s/rad"), (axes[1], "pitch", "rad² s/rad")):
         top = 0.0
         for name in sp["model"].values:
@@ -368,7 +400,7 @@ def spectra_figure(ds: xr.Dataset, sea: str, tp: float) -> plt.Figure:
         ax.axvspan(w[0], LOW_OMEGA, color="0.92", zorder=0, label="ω < 0.1 rad/s")
         ax.set_ylabel(f"S_{key} [{unit}]")
         ax.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=8, loc="lower left")
+    axes[1].legend(fontsize=8, loc="lower left")  # the pitch panel has room there
     axes[-1].set_xlim(w[0], 2.0)
     axes[-1].set_xlabel("ω [rad/s]")
     fig.tight_layout()
@@ -383,24 +415,28 @@ def report_section(folder: Path, stem: Path = SHIPPED) -> str:
     first = seas[0]
     fig = spectra_figure(ds, first, res["held_out_seas"][first]["tp"])
     save(fig, Path(folder) / "moordyn_hybrid_spectra.png")
-    pred, long = res["prediction"], res["long"]
     lines = ["### The hybrid on the MoorDyn-coupled reference (design fidelity)", "",
              "Reference: Cummins (surge, heave, pitch) + MoorDyn + slow drift (Newman) + Morison "
              "drag + the operating NREL 5-MW rotor in turbulent wind, JONSWAP seas "
-             f"({res['duration']:g} s each). The hybrid: the quasi-static mooring and the rotor "
-             "in the ODE, a network (inputs z, ż, η) for MoorDyn − quasi-static + drift + drag, "
-             f"trained on {len(res['train_seas'])} seas. Shipped results "
-             "(`hybridwsi/data/oc3_moordyn_hybrid.json/.nc`, `scripts/oc3_moordyn_hybrid.py`).",
-             "", *table_markdown(res, first), ""]
+             f"({res['duration']:g} s each). Two hybrids, each a network (inputs z, ż, η) "
+             f"trained on {len(res['train_seas'])} seas and winds through the hybrid pipeline: "
+             + "; ".join(f"{LABELS[k]}: the network learns {v}" for k, v in PARTITIONS.items())
+             + ". The hybrids' and the linear model's fairlead tensions are the quasi-static "
+             "ones along their motion. Shipped results (`hybridwsi/data/oc3_moordyn_hybrid."
+             "json/.nc`, `scripts/oc3_moordyn_hybrid.py`).", "", *table_markdown(res, first), ""]
     for sea in seas[1:]:
-        e = res["held_out"][sea]["errors"]["hybrid"]
-        lines.append(f"Held-out sea {sea}: hybrid surge {100 * e['surge']['nrms']:.2f} %, pitch "
-                     f"{100 * e['pitch']['nrms']:.2f} %, fairlead tension "
-                     f"{100 * e['tension']['nrms']:.2f} %, low-frequency surge energy "
-                     f"{100 * e['low_energy']:+.1f} %.")
-    lines += ["", f"Predicted {'stable' if pred['stable'] else 'UNSTABLE'} (spectral radius "
-              f"{pred['spectral_radius']:.6f} at Δt {pred['dt']:g} s); the "
-              f"{long['duration'] / 3600:.1f}-hour run is "
-              f"{'bounded' if long['finite'] else 'NOT finite'}.", "",
-              "![spectra](fowt/moordyn_hybrid_spectra.png)", ""]
+        for k in PARTITIONS:
+            e = res["held_out"][sea]["errors"][k]
+            lines.append(f"Held-out sea {sea}, {LABELS[k]}: surge {100 * e['surge']['nrms']:.2f} "
+                         f"%, pitch {100 * e['pitch']['nrms']:.2f} %, fairlead tension "
+                         f"{100 * e['tension']['nrms']:.2f} %, low-frequency surge energy "
+                         f"{100 * e['low_energy']:+.1f} %.")
+    lines.append("")
+    for k in PARTITIONS:
+        pred, long = res["prediction"][k], res["long"][k]
+        lines.append(f"{LABELS[k]}: predicted {'stable' if pred['stable'] else 'UNSTABLE'} "
+                     f"(spectral radius {pred['spectral_radius']:.6f} at Δt {pred['dt']:g} s); "
+                     f"its {long['duration'] / 3600:.1f}-hour run is "
+                     f"{'bounded' if long['finite'] else 'NOT finite'}.")
+    lines += ["", "![spectra](fowt/moordyn_hybrid_spectra.png)", ""]
     return "\n".join(lines)
