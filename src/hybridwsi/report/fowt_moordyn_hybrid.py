@@ -1,7 +1,9 @@
-"""The hybrid on the MoorDyn-coupled OC3-Hywind reference (issue 29 items 5-6): the metrics of
-``scripts/oc3_moordyn_hybrid.py`` and the report's table and spectra from the shipped results
-``hybridwsi/data/oc3_moordyn_hybrid.{json,nc}`` (docs/OC3_HYWIND.md "The hybrid on the
-MoorDyn-coupled reference"). Nothing here runs MoorDyn: the report reads the shipped file.
+"""The hybrid on the MoorDyn-coupled OC3-Hywind reference (issue 29 items 5-6): the set-up
+(seas, winds, the two partitions, the runs) and the metrics of ``scripts/oc3_moordyn_hybrid.py``
+and ``benchmarks/bench_mooring.py --hybrid``, and the report's table and spectra from the
+shipped results ``hybridwsi/data/oc3_moordyn_hybrid.{json,nc}`` (docs/OC3_HYWIND.md "The
+hybrid on the MoorDyn-coupled reference"). The report's path runs no MoorDyn: it reads the
+shipped files.
 
 Metrics (per held-out sea, after the ramp; ``ref`` = the MoorDyn-coupled run):
 
@@ -16,7 +18,7 @@ Metrics (per held-out sea, after the ramp; ``ref`` = the MoorDyn-coupled run):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import json
@@ -41,8 +43,10 @@ from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.pipeline import HybridPipeline
 from hybridwsi.waves import JONSWAP
 
-__all__ = ["LOW_OMEGA", "MODELS", "SHIPPED", "linear_offset", "load_shipped", "metrics", "psd",
-           "report_section", "series", "spectra", "spectra_figure", "with_tensions"]
+__all__ = ["HELD", "LOW_OMEGA", "MODELS", "NETWORKS", "PARTITIONS", "SHIPPED", "TRAIN",
+           "case_model", "hybrid_case", "known_part", "linear_offset", "load_shipped",
+           "metrics", "prepared", "psd", "report_section", "run_hybrid", "series", "simulate",
+           "spectra", "spectra_figure", "with_tensions"]
 
 #: the results of scripts/oc3_moordyn_hybrid.py (``.json`` and ``.nc``) and its network
 #: (``.pt`` and ``.json``, :meth:`ForceNetwork.load`)
@@ -111,6 +115,7 @@ def case_model(sea: tuple, mooring: str, *, linear: bool = False) -> CaseModel:
 
 
 def jonswap(sea: tuple) -> JONSWAP:
+    """The JONSWAP sea of ``(Hs [m], Tp [s], seed, ...)`` (γ 3.3, 200 components)."""
     hs, tp, seed = sea[:3]
     return JONSWAP(hs=hs, tp=tp, seed=seed)
 
@@ -154,7 +159,8 @@ def prepared(hist: xr.Dataset, model: CaseModel) -> xr.Dataset:
     ``F_hybrid_lin = F_tot − (F_rotor_wind − B_aero ż)`` — each history its own wind."""
     rotor = model.components()["rotor"]
     t = np.asarray(hist["time"].values, float)
-    f_wind = rotor._wrench(rotor.wind.speed(t), t)
+    still = np.zeros((t.size, len(DOFS)))
+    f_wind = np.asarray(rotor.ode_force(t, still, still, np.zeros(0)), float)  # hub at rest
     new = {"F_rotor_wind": f_wind}
     if "F_rotor" in hist:
         b = rotor.linear_coefficients(len(DOFS))[1]
@@ -369,7 +375,9 @@ def table_markdown(res: Mapping[str, Any], sea: str) -> list[str]:
               "energy |", "|---|---|---|---|---|"]
     for name in (n for n in MODELS if n != "moordyn"):
         e = m["errors"][name]
-        cell = lambda k: (f"{100 * e[k]['nrms']:.2f} % ({100 * e[k]['nrms_dynamic']:.1f} %)")  # noqa: E731
+        def cell(k: str, e: Mapping[str, Any] = e) -> str:
+            return f"{100 * e[k]['nrms']:.2f} % ({100 * e[k]['nrms_dynamic']:.1f} %)"
+
         lines.append(f"| {LABELS[name]} | {cell('surge')} | {cell('pitch')} | "
                      f"{cell('tension')} | {100 * e['low_energy']:+.1f} % |")
     lines += ["", "Errors: RMS(x − x_ref)/RMS(x_ref) (in brackets: /std(x_ref), the "
