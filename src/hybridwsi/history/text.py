@@ -25,7 +25,7 @@ from hybridwsi.errors import InputError
 from hybridwsi.files import NETCDF_MAGIC, atomic_write
 from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
-from hybridwsi.history.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
+from hybridwsi.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
 
 @lru_cache(maxsize=65536)
 def split_header(header: str) -> tuple[str, str | None]:
