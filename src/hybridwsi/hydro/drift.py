@@ -61,12 +61,14 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi._meta import provenance
+from hybridwsi.dofs import check_dofs
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.files import read_netcdf, to_netcdf
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.bem.cache import default_cache_dir
 from hybridwsi.hydro.bem.planning import json_sha256
 from hybridwsi.hydro.bem.solve import blas_single_thread, quiet_capytaine
+from hybridwsi.waves import dispersion_k
 
 #: the six generalised force components (influenced DOFs) of the near field
 ALL_DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
@@ -186,8 +188,6 @@ def _check_settings(omega: Any, wave_directions: Any, water_depth: Any, n_theta:
 
 def _solve_depth(w: float, depth: float, g: float, deep_kh: float | None) -> float:
     """The depth [m] a frequency is solved in: ``inf`` where k h ≥ ``deep_kh``."""
-    from hybridwsi.waves import dispersion_k
-
     if not math.isfinite(depth) or deep_kh is None:
         return depth
     return math.inf if float(dispersion_k(w, depth, g)) * depth >= deep_kh else depth
@@ -764,8 +764,6 @@ def table_coefficients(table: xr.Dataset, dofs: Sequence[str], *, direction: flo
     ``field``: ``"far_field"``, ``"near_field"`` or ``"combined"`` (far field where it is
     defined, i.e. surge, sway and yaw, near field for heave, roll and pitch).
     """
-    from hybridwsi.dofs import check_dofs
-
     if field not in ("far_field", "near_field", "combined"):
         raise InputError(f"drift field must be far_field, near_field or combined, got {field!r}")
     for name in ("far_field", "near_field"):

@@ -36,12 +36,20 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import bodies, cummins, waves
 from hybridwsi._meta import version
+from hybridwsi.cases import load_case
+from hybridwsi.diagnostic.partition import select_partition, table_to_json
+from hybridwsi.diagnostic.reconstruct import reconstruct
+from hybridwsi.diagnostic.regression import regress
 from hybridwsi.errors import InputError
+from hybridwsi.forces.linear import known_from
 from hybridwsi.history import to_netcdf
 from hybridwsi.history import write_json as _write_json
 from hybridwsi.history import write_text as _write_text
-from hybridwsi.hydro import coefficients
+from hybridwsi.hydro import bem, coefficients
+from hybridwsi.importers import read_history
+from hybridwsi.report.kramer_report import run_kramer_hybrid
 from hybridwsi.report.markdown import (
     PARTITION_LABELS,
     dynamic_stiffness_note,
@@ -51,6 +59,9 @@ from hybridwsi.report.markdown import (
     table1_markdown,
     wave_note,
 )
+from hybridwsi.report.validation import run_decay_validation
+from hybridwsi.sph import tank
+from hybridwsi.sph.run import run_case
 
 SPH_HISTORY = "sph_regular_waves.nc"
 #: the SPH run's resume checkpoint (hybridwsi.sph.run.run_case), kept across killed runs
@@ -72,8 +83,6 @@ def _log(msg: str, progress: bool) -> None:
 
 
 def _bem_coefficients(body, cfg: dict, progress: bool, water_depth: float | None = None):
-    from hybridwsi.hydro import bem
-
     omega = np.geomspace(cfg["omega_min"], cfg["omega_max"], cfg["n_omega"])
     depth = cfg.get("water_depth", np.inf) if water_depth is None else water_depth
     return bem.compute(body, omega, water_depth=depth, n_panels=cfg["n_panels"],
@@ -121,8 +130,6 @@ def _none_to_inf(value: Any) -> Any:
 def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dict[str, list]:
     """The paper's three partitions: C and A∞ from the history's matrices, else from the
     coefficients (:func:`hybridwsi.forces.linear.known_from`, the one route)."""
-    from hybridwsi.forces.linear import known_from
-
     hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
     return {"1": [], "2": [hydrostatic], "3": [hydrostatic, added_mass_inf]}
 
@@ -130,8 +137,6 @@ def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dic
 def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
                    force_accuracy: float) -> dict[str, Table1Case]:
     """Regress F_bb of each partition on the reference motion (paper Eq. 5–7)."""
-    from hybridwsi.diagnostic.regression import regress
-
     return {
         k: Table1Case(PARTITION_LABELS[k], regress(hist, force="F_tot", known=known,
                                                    force_accuracy=force_accuracy), known)
@@ -168,8 +173,6 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     nothing known the error grows as δF t²/2m (drift), with C known it stays bounded (δF/C),
     with damping in the ODE it settles. Metrics are reported for clean and biased forces.
     """
-    from hybridwsi.diagnostic.reconstruct import reconstruct
-    from hybridwsi.diagnostic.regression import regress
     from hybridwsi.report import plots  # matplotlib: imported only when drawing
 
     ident = (regress(hist, force=motion_force, force_accuracy=force_accuracy)
@@ -225,7 +228,6 @@ def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
     docs/THEORY.md §5) and ``hybrid_demo.json`` (predicted vs observed stability of a network-in-the-loop rollout);
     returns the Markdown section of the report.
     """
-    from hybridwsi.diagnostic.partition import select_partition, table_to_json
     from hybridwsi.surrogate.demo import hybrid_demo
 
     _log("Outlook: component selection", progress)
@@ -263,8 +265,6 @@ def read_sph_history(src: Path, *, mass: float | None, period: float,
     ``MIN_SPH_PERIODS`` wave periods ``period`` [s] after ``window_start`` [s] (Table 1's
     regression window). Raises :class:`InputError` otherwise: called before any BEM run.
     """
-    from hybridwsi.importers import read_history
-
     if not src.is_file():
         raise InputError(f"--sph-history: no such file {src}")
     hist = _needs_force(read_history(src, mass=mass), src)
@@ -296,13 +296,8 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
     ``read_history`` understands (:func:`read_sph_history`); else the history shipped in
     ``hybridwsi/data``; else none ("pending").
     """
-    from hybridwsi.cases import load_case
-
     case = load_case("paper_sphere")
     if recompute:
-        from hybridwsi.sph import tank
-        from hybridwsi.sph.run import run_case
-
         cfg = case["sph_regular_waves"]  # the shipped run's set-up
         sph_case = tank.build("regular3d", **{**cfg, "dp": dp or cfg["dp"]})
         target = out / "histories" / SPH_HISTORY
@@ -390,8 +385,6 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     history (:func:`sph_history`). Inputs are checked first; the folder is replaced as a whole
     when the new set is complete (module docstring).
     """
-    from hybridwsi.cases import load_case
-
     out = Path(out).absolute()
     check_out_folder(out)
     case = load_case("paper_sphere")
@@ -420,9 +413,6 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
            recompute_sph: bool, sph_pre: tuple[xr.Dataset, str] | None, sph_dp: float | None,
            sph_openmp: bool) -> dict[str, Any]:
     """Write the whole results set into ``out`` (the partial folder)."""
-    from hybridwsi import bodies, cummins, waves
-    from hybridwsi.cases import load_case
-
     t0 = time.perf_counter()
     cfg = case["bem_quick" if quick else "bem"]
     b = case["body"]
@@ -477,7 +467,6 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
     decay_md = "Decay validation skipped."
     if decay:
         from hybridwsi.report import plots  # matplotlib: imported only when drawing
-        from hybridwsi.report.validation import run_decay_validation
 
         kcase = load_case("kramer2021_decay")
         kcfg = kcase["bem_quick" if quick else "bem"]
@@ -495,7 +484,6 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
 
     kramer_md = ""
     if decay and hybrid:  # the hybrid on the measured decays (leave one drop out)
-        from hybridwsi.report.kramer_report import run_kramer_hybrid
 
         _log("Kramer hybrid: leave one drop out", progress)
         kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)

@@ -17,6 +17,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi import bodies, cummins
+from hybridwsi.cases import load_case
 from hybridwsi.errors import InputError
 from hybridwsi.history import fit_damped_oscillator, mean_crossing_period
 from hybridwsi.importers.kramer import (
@@ -25,6 +27,7 @@ from hybridwsi.importers.kramer import (
     read_kramer_drop,
     read_kramer_numerical,
 )
+from hybridwsi.sph.decay import first_extrema, grid_convergence
 
 DROPS = KRAMER_DROPS
 
@@ -183,8 +186,6 @@ def decay_measures(t: np.ndarray, zn: np.ndarray, te0: float, measured: xr.Datas
         the first ``trough`` [-] and its time ``trough_t`` [s]; ``rms`` over [0, rms_window te0]
         as :func:`rms_heave_error` (NaN when the record is shorter).
     """
-    from hybridwsi.sph.decay import first_extrema  # pure NumPy; no PySPH
-
     t, zn = np.asarray(t, float), np.asarray(zn, float)
     fit = fit_damped_oscillator(t, zn, te0, (0.0, fit_window * te0))
     after = t >= 0.0  # a measured record starts before the release
@@ -247,8 +248,6 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
         the extrapolated value, the GCI of the finest run [%] and whether the three are
         monotone (in the asymptotic range; otherwise the GCI is not to be trusted).
     """
-    from hybridwsi.sph.decay import grid_convergence  # pure NumPy; no PySPH
-
     if len(rows) < 3:
         raise InputError(f"a grid convergence index needs runs at three spacings, got {len(rows)}")
     dps = sorted(rows)[:3]
@@ -287,9 +286,6 @@ def run_decay_validation(
         Show a progress bar over the runs.
     """
     from tqdm.auto import tqdm
-
-    from hybridwsi import bodies, cummins
-    from hybridwsi.cases import load_case
 
     case = load_case("kramer2021_decay")
     te0 = case["experiment"]["Te0"]

@@ -20,6 +20,7 @@ import xarray as xr
 
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, make_history, to_netcdf
+from hybridwsi.sph.mdbc import body_boundary_post
 from hybridwsi.sph.symmetry import mirror_domain, n_real, reflect_crossers, remove_ghosts
 from hybridwsi.sph.tank import SPHCase, free_surface
 
@@ -54,7 +55,6 @@ def make_equations(case: SPHCase) -> list:
         WallForce,
         WallPressureAdami,
     )
-    from hybridwsi.sph.mdbc import body_boundary_post
 
     gx, gy, gz = case.gvec
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}

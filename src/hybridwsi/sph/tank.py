@@ -21,6 +21,8 @@ import numpy as np
 from hybridwsi.bodies import cap_volume
 from hybridwsi.errors import InputError
 from hybridwsi.sph import wavemaker
+from hybridwsi.sph.mdbc import wendland_quintic
+from hybridwsi.sph.packing import pack_around_body
 
 RHO_WATER = 998.2
 G = 9.81
@@ -307,8 +309,6 @@ def _c0(g: float, height: float, factor: float) -> float:
 # --------------------------------------------------------------------------- probes
 def _wendland_quintic(r: np.ndarray, h: np.ndarray, dim: int) -> np.ndarray:
     """Wendland quintic kernel W(r, h) [1/m^dim], the one the solver uses (support 2h)."""
-    from hybridwsi.sph.mdbc import wendland_quintic
-
     return wendland_quintic(r, h, dim)[0]
 
 
@@ -675,8 +675,6 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     flags = np.r_[np.zeros(len(walls)), np.ones(len(paddle)), np.full(len(body), 2.0)]
     packing_info: dict[str, float] = {}
     if packing == "packed":
-        from hybridwsi.sph.packing import pack_around_body
-
         # the body's shell particles carry their layer's volume (a few % off dp^dim)
         vol_solid = np.full(len(pts), dp ** dim)
         if smooth_body:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import __version__
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, force_unit, is_rotation
 from hybridwsi.errors import InputError
 from hybridwsi.hydro.coefficients import PAIR, pair_units_attr
@@ -108,8 +109,6 @@ def build(
     source, input_hash : provenance (``input_hash`` is a content hash of the files).
     where : file name used in error messages.
     """
-    from hybridwsi import __version__
-
     dofs = list(check_dofs(list(dofs)))
     n = len(dofs)
     omega = np.asarray(omega, dtype=float)
