@@ -409,6 +409,39 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     return summary
 
 
+def _decay_section(out: Path, *, quick: bool, progress: bool) -> str:
+    """Fig. 1: the Kramer sphere's BEM and the decay runs against the experiment, written
+    into ``out``; returns the section's Markdown."""
+    from hybridwsi.report import plots  # matplotlib: imported only when drawing
+
+    kcase = load_case("kramer2021_decay")
+    kcfg = kcase["bem_quick" if quick else "bem"]
+    _log("Fig. 1: BEM of the Kramer sphere and decay runs", progress)
+    kbody = bodies.FloatingSphere.kramer2021()
+    kcoeffs = _bem_coefficients(kbody, kcfg, progress,
+                                water_depth=kcase["experiment"]["water_depth"])
+    val = run_decay_validation(kcoeffs, progress=progress)
+    to_netcdf(val.curves, out / "fig1_decay.nc")
+    plots.save(plots.decay_validation_figure(val.curves), out / "fig1_decay.png")
+    _write_json(out / "decay_validation.json", val.to_json())
+    decay_md = val.to_markdown()
+    _write_text(out / "decay_validation.md", decay_md + "\n")
+    return decay_md
+
+
+def _fowt_section(out: Path, *, quick: bool, progress: bool) -> str:
+    """Floating wind: OC3-Hywind (mooring, natural frequencies, decays, RAOs) and the OC4
+    semi (also its 6x6 diagnostic), written into ``out``; returns their Markdown."""
+    # the FOWT reports draw (matplotlib) and train networks (PyTorch): imported when run
+    from hybridwsi.report.fowt import run_fowt
+    from hybridwsi.report.fowt_semi import run_fowt_semi
+
+    _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
+    fowt_md = run_fowt(out, quick=quick, progress=progress)
+    _log("OC4-DeepCwind semi: natural frequencies, decays, RAOs, 6x6 diagnostic", progress)
+    return fowt_md + "\n" + run_fowt_semi(out, quick=quick, progress=progress)
+
+
 def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, hybrid: bool,
            recompute_sph: bool, sph_pre: tuple[xr.Dataset, str] | None, sph_dp: float | None,
            sph_openmp: bool) -> dict[str, Any]:
@@ -464,40 +497,14 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
                               b["mass"], out, "SPH", "fig2_sph", force_accuracy=acc["SPH"])
     _write_json(out / "fig2_metrics.json", fig2)
 
-    decay_md = "Decay validation skipped."
-    if decay:
-        from hybridwsi.report import plots  # matplotlib: imported only when drawing
-
-        kcase = load_case("kramer2021_decay")
-        kcfg = kcase["bem_quick" if quick else "bem"]
-        _log("Fig. 1: BEM of the Kramer sphere and decay runs", progress)
-        kbody = bodies.FloatingSphere.kramer2021()
-        kcoeffs = _bem_coefficients(kbody, kcfg, progress,
-                                    water_depth=kcase["experiment"]["water_depth"])
-        val = run_decay_validation(kcoeffs, progress=progress)
-
-        to_netcdf(val.curves, out / "fig1_decay.nc")
-        plots.save(plots.decay_validation_figure(val.curves), out / "fig1_decay.png")
-        _write_json(out / "decay_validation.json", val.to_json())
-        decay_md = val.to_markdown()
-        _write_text(out / "decay_validation.md", decay_md + "\n")
-
+    decay_md = _decay_section(out, quick=quick, progress=progress) if decay else \
+        "Decay validation skipped."
     kramer_md = ""
     if decay and hybrid:  # the hybrid on the measured decays (leave one drop out)
-
         _log("Kramer hybrid: leave one drop out", progress)
         kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)
-
-    fowt_md = ""
-    if decay:  # floating wind: OC3-Hywind mooring, natural frequencies, decays, RAOs
-        from hybridwsi.report.fowt import run_fowt
-
-        _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
-        fowt_md = run_fowt(out, quick=quick, progress=progress)
-        from hybridwsi.report.fowt_semi import run_fowt_semi
-
-        _log("OC4-DeepCwind semi: natural frequencies, decays, RAOs, 6x6 diagnostic", progress)
-        fowt_md += "\n" + run_fowt_semi(out, quick=quick, progress=progress)
+    # floating wind: OC3-Hywind and the OC4 semi
+    fowt_md = _fowt_section(out, quick=quick, progress=progress) if decay else ""
 
     outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
                           force_accuracy=acc["BEM"]) if hybrid else "")

@@ -262,6 +262,25 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
     return "\n".join(lines)
 
 
+def _experiment_curves(measured: dict[str, xr.Dataset], drops: tuple[str, ...], te0: float
+                       ) -> xr.Dataset:
+    """The measured heave / H0 (mean and 95 % band) of each drop on its own t / Te0 grid."""
+    return xr.concat(
+        [
+            xr.Dataset(
+                {
+                    "exp_mean": ("t_exp", measured[d]["z"].values[:, 0]),
+                    "exp_ci95_lower": ("t_exp", measured[d]["ci95_lower"].values.ravel()),
+                    "exp_ci95_upper": ("t_exp", measured[d]["ci95_upper"].values.ravel()),
+                },
+                coords={"t_exp": measured[d]["time"].values / te0},
+            )
+            for d in drops
+        ],
+        dim=pd.Index(list(drops), name="drop_test"),
+    )
+
+
 def run_decay_validation(
     coeffs: xr.Dataset,
     *,
@@ -336,20 +355,7 @@ def run_decay_validation(
     model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
         "heave_over_H0"
     ]
-    exp_ds = xr.concat(
-        [
-            xr.Dataset(
-                {
-                    "exp_mean": ("t_exp", exp_cache[d]["z"].values[:, 0]),
-                    "exp_ci95_lower": ("t_exp", exp_cache[d]["ci95_lower"].values.ravel()),
-                    "exp_ci95_upper": ("t_exp", exp_cache[d]["ci95_upper"].values.ravel()),
-                },
-                coords={"t_exp": exp_cache[d]["time"].values / te0},
-            )
-            for d in drops
-        ],
-        dim=pd.Index(list(drops), name="drop_test"),
-    )
+    exp_ds = _experiment_curves(exp_cache, drops, te0)
     ds = xr.merge([exp_ds, model])
     ds["t_exp"].attrs.update(units="1", long_name="t / Te0")
     ds.attrs.update(te0=te0, rms_window=str(window), dt=dt)
