@@ -540,8 +540,8 @@ def read_csv(
     # only the columns asked for are parsed (all of them when the forces are not named)
     table.load(table.columns if named is None else [*used, *(c for cs in named.values() for c in cs)])
     extra_vars, extra_coords = _eta_variable(table, eta_col)
-    t, kin, force_cols, force_data, extra_cols, ignored = _read_columns(table, cols, used, named,
-                                                                        dof_names)
+    t, kin, force_cols, force_data, extra_cols, ignored = _read_history_columns(
+        table, cols, used, named, dof_names)
     ds = make_history(
         t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names,
         mass=_meta_mass(table) if mass is None else mass,
@@ -559,8 +559,8 @@ def read_csv(
     return ds
 
 
-def _read_columns(table: TextTable, cols: dict[str, list[str]], used: set[str],
-                  named: dict[str, list[str]] | None, dof_names: list[str]) -> tuple:
+def _read_history_columns(table: TextTable, cols: dict[str, list[str]], used: set[str],
+                          named: dict[str, list[str]] | None, dof_names: list[str]) -> tuple:
     """Time [s], motion per role and forces per variable in SI, the force and extra columns
     (every unused numeric one when the forces are not ``named``) and the count of columns
     not read."""
