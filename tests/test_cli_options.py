@@ -113,9 +113,12 @@ def test_shared_options_share_one_definition(parsers):
 
 
 def test_hybrid_training_options_default_to_the_former_constants(parsers):
-    args = parsers["hybrid"].parse_args(["a.nc", "b.nc", "--out", "x"])
-    assert (args.learning_rate, args.patience, args.batch_size) == (3e-3, 30, 128)
-    assert args.hidden == (32,) and args.feature_window == 11 and args.train_seed == 0
+    from hybridwsi.commands.hybrid import _network_settings
+
+    # options left out resolve (without a case) to the constants the command always used
+    net = _network_settings(parsers["hybrid"].parse_args(["a.nc", "b.nc", "--out", "x"]))
+    assert (net["lr"], net["patience"], net["batch_size"]) == (3e-3, 30, 128)
+    assert net["hidden"] == (32,) and net["window"] == 11 and net["seed"] == 0
     assert parsers["hybrid"].parse_args(["a.nc", "--out", "x", "--hidden", "16,8"]).hidden \
         == (16, 8)
 

@@ -410,6 +410,15 @@ def elevation_wave(coeffs: xr.Dataset, path: str | os.PathLike, column: str | No
     lowest one the transfer function is held). Refused when more than
     :data:`MAX_VARIANCE_OUTSIDE` of η's variance lies above it."""
     t, eta, source = read_elevation(path, column)
+    return record_wave(coeffs, t, eta, source=source, direction=direction)
+
+
+def record_wave(coeffs: xr.Dataset, t: np.ndarray, eta: np.ndarray, *, source: str = "",
+                direction: float = 0.0) -> ElevationRecord:
+    """A wave elevation record η(t) [s, m] as the wave of a run or of a history's excitation
+    (:func:`elevation_wave` without the file; ``hybridwsi hybrid`` on histories with η but
+    no ``F_exc``), refused as there when too much of its variance lies above the
+    coefficients' frequencies."""
     omega_max = float(np.max(coeffs["omega"].values))
     wave = ElevationRecord(t, eta, omega_max=omega_max, source=source, direction=direction)
     if wave.variance_outside > MAX_VARIANCE_OUTSIDE:

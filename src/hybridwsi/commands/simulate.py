@@ -116,6 +116,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--nonlinear-hydrostatics", action="store_true",
                    help="exact hydrostatic force of the body (heave of the sphere: spherical "
                         "cap) instead of -C z on the DOFs the body can do exactly")
+    p.add_argument("--network", metavar="MODEL",
+                   help="with --case: run the hybrid solver of a model folder (hybridwsi hybrid "
+                        "--case ... --out MODEL): the known components of its partition plus "
+                        "its network force; refused when the case's hash, the DOFs or --dt "
+                        "differ from its certificate. Writes F_network, F_known and the "
+                        "per-step flag outside_envelope (network inputs outside the training "
+                        "envelope; warns above 1 %%)")
     o.add_out(p, "output TimeHistory NetCDF", required=True, metavar="HIST.nc")
     o.add_quiet(p)
 
@@ -168,6 +175,8 @@ def _check_sources(args: argparse.Namespace) -> None:
                         ("--rotor/--wind-*/--slow-drift", bool(o.case_overrides(args)))):
         if given:
             raise InputError(f"{name} needs --case")
+    if args.network:
+        raise InputError("--network needs --case (the case the model was trained for)")
 
 
 def _wave(args: argparse.Namespace, coeffs: xr.Dataset, defaults: dict[str, Any]
@@ -239,6 +248,38 @@ def _run_case(args: argparse.Namespace) -> xr.Dataset:
         hydrostatics="nonlinear" if args.nonlinear_hydrostatics else None)
 
 
+#: options the hybrid solver does not take (its forces are the model's partition), by dest
+NOT_WITH_NETWORK = {"external_force": "--external-force", "mooring": "--mooring",
+                    "radiation": "--radiation", "nonlinear_hydrostatics":
+                    "--nonlinear-hydrostatics"}
+
+
+def _run_network(args: argparse.Namespace) -> xr.Dataset:
+    """``--network MODEL``: the hybrid solver of a certified model folder on this sea."""
+    o.require("torch")
+    from hybridwsi.surrogate.certified import CertifiedModel
+
+    clash = [flag for dest, flag in NOT_WITH_NETWORK.items() if getattr(args, dest)]
+    clash += ["--rotor/--wind-*/--slow-drift"] if o.case_overrides(args) else []
+    clash += ["--decay"] if any(args.decay) else []
+    if clash:
+        raise InputError(f"--network runs the model's partition from rest; do not combine it "
+                         f"with {', '.join(clash)}")
+    net = CertifiedModel.load(args.network)  # an altered folder is refused here
+    case = load_case(args.case)
+    dofs = args.dofs or tuple(net.doc["dofs"])
+    net.check_run(case.sha256, case.label, dofs, args.dt if args.dt is not None
+                  else float(net.doc["dt"]))  # before the coefficients are computed
+    model = CaseModel.build(case, dofs=dofs, coeffs=args.coeffs, quick=args.quick,
+                            progress=not args.quiet)
+    defaults = _case_defaults(case)
+    wave = _wave(args, model.coeffs, defaults)
+    duration, dt, ramp = _timing(args, wave, {**defaults, "dt": float(net.doc["dt"])})
+    o.check_steps(duration, dt, len(model.dofs))
+    return net.simulate(model, wave, duration=duration, dt=dt, ramp=ramp,
+                        progress=not args.quiet)
+
+
 def _run_coefficients(args: argparse.Namespace) -> xr.Dataset:
     coeffs = _coefficients(args)
     dofs = args.dofs or ("Heave",)
@@ -281,10 +322,13 @@ def _summary(hist: xr.Dataset, path: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     _check_sources(args)
-    inputs = [args.coeffs, args.external_force, args.wave_elevation,
+    inputs = [args.coeffs, args.external_force, args.wave_elevation, args.network,
               None if args.case is None or is_builtin(args.case) else args.case]
     check_output_path(args.out, inputs)
-    hist = _run_case(args) if args.case is not None else _run_coefficients(args)
+    if args.network:
+        hist = _run_network(args)
+    else:
+        hist = _run_case(args) if args.case is not None else _run_coefficients(args)
     path = to_netcdf(hist, args.out)
     if not args.quiet:
         _summary(hist, path)

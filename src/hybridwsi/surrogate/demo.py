@@ -31,28 +31,26 @@ from hybridwsi.errors import InputError
 from hybridwsi.forces import KnownComponent
 from hybridwsi.forces.external import PrescribedForce
 from hybridwsi.forces.linear import known_from, mass_from, matrix_from
-from hybridwsi.surrogate.network import ForceNetwork
-from hybridwsi.surrogate.rollout import check_stability, corrections_for, rollout
+from hybridwsi.surrogate.pipeline import PRESETS, HybridPipeline
 
 
 def partitions(coeffs: xr.Dataset | None,
                hist: xr.Dataset | None = None) -> dict[str, dict[str, Any]]:
-    """The partitions the demo tries: known components and network inputs.
+    """The partitions the demo tries (:data:`hybridwsi.surrogate.pipeline.PRESETS`): known
+    components and network inputs.
 
     C and A∞ come from ``hist`` when it carries them, else from ``coeffs`` restricted to the
-    history's DOFs (all of the coefficients' DOFs without a history).
+    history's DOFs (all of the coefficients' DOFs without a history); the excitation is the
+    cases' ``F_exc``.
     """
-    hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
-    return {
-        "added_mass_to_network": {
-            "known": [hydrostatic, PrescribedForce("F_exc")],
-            "inputs": ("zdot", "zddot"),
-        },
-        "recommended": {
-            "known": [hydrostatic, added_mass_inf, PrescribedForce("F_exc")],
-            "inputs": ("zdot",),
-        },
-    }
+    out = {}
+    for name, (candidates, inputs) in PRESETS.items():
+        matrices = [c for c in candidates if c != "excitation"]
+        known: list[KnownComponent] = known_from(hist, coeffs, matrices)
+        if "excitation" in candidates:
+            known.append(PrescribedForce("F_exc"))
+        out[name] = {"known": known, "inputs": inputs}
+    return out
 
 
 def _one_dof(mat: np.ndarray | None, name: str) -> float:
@@ -103,16 +101,13 @@ def evaluate_partition(
     (:func:`~hybridwsi.surrogate.rollout.corrections_for`) and the prediction is made for it.
     """
     known: list[KnownComponent] = part["known"]
-    net = ForceNetwork(inputs=part["inputs"], **net_kw).fit(train, "F_bb", known=known)
-    pred = check_stability(net, train, mass=mass, known=known, mode=mode)
-    n_corr = corrections_for(pred.added_mass_ratio) if mode == "corrected" else 1
-    if n_corr != 1:
-        pred = check_stability(net, train, mass=mass, known=known, mode=mode,
-                               corrections=n_corr)
-    kw = {"mass": mass, "known": known, "mode": mode, "corrections": n_corr, "check": False}
+    # the demo rolls out the unstable partitions on purpose: allowed, with the warning off
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # the demo runs unstable ones on purpose
-        res = rollout(net, test, force=True, **kw)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        pipe = HybridPipeline(name, inputs=part["inputs"], known=known, mode=mode,
+                              network=net_kw, allow_unstable=True).fit(train, mass=mass)
+        res = pipe.rollout(test)
+    net, pred, n_corr = pipe.network_, pipe.stability_, pipe.corrections_
     out: dict[str, Any] = {
         "partition": name,
         "known": [k.describe() for k in known],
@@ -132,7 +127,7 @@ def evaluate_partition(
     }
     out["agree"] = out["predicted_stable"] == out["observed_stable"]
     if long_case is not None and pred.stable:
-        long = rollout(net, [long_case], **kw)
+        long = pipe.rollout([long_case])
         out["long_run"] = {
             "duration_s": float(long.histories[0]["time"][-1] - long.histories[0]["time"][0]),
             "blew_up": bool(long.blew_up[0]),

@@ -256,7 +256,8 @@ def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
             n_steps: int | None = None, check: bool = True, force: bool = False,
             reference_for_check: xr.Dataset | Sequence[xr.Dataset] | None = None,
             max_iter: int = 50, tol: float = 1e-9, corrections: int = 1,
-            compiled: bool | None = None, progress: bool = False) -> RolloutResult:
+            compiled: bool | None = None, progress: bool = False,
+            amplitude: float | None = None) -> RolloutResult:
     """Integrate the hybrid model for a batch of cases.
 
     Each case history supplies the time grid (uniform, same length for all cases), the wave
@@ -298,6 +299,9 @@ def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
         its divergence was seen). False forces the NumPy stepper.
     progress : bool
         tqdm progress bar over steps (NumPy stepper only).
+    amplitude : float, optional
+        Reference max |z| of every case [m, rad] for the divergence watch (default: each
+        case's own; give it when the cases are not references, e.g. a run from rest).
     """
     net._check_fitted()
     hs = [cases] if isinstance(cases, xr.Dataset) else list(cases)
@@ -321,8 +325,9 @@ def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
     sol = solve_coupled(
         stepper, pre, start.z, start.v, dt, progress=progress, a0=start.a, x0=start.x,
         window=start.buf, eta=eta, t=np.asarray(hs[0]["time"].values, float), start=k0,
-        lead=lead, n_steps=n_steps, ref_amp=np.maximum(np.max(np.abs(kin["z"]), axis=(1, 2)),
-                                                       1e-12),
+        lead=lead, n_steps=n_steps, ref_amp=np.maximum(
+            np.max(np.abs(kin["z"]), axis=(1, 2)) if amplitude is None
+            else np.full(len(hs), float(amplitude)), 1e-12),
         layers=folded_layers(net) if use_compiled else None)
     saw = _sawtooth(sol.a, kin["zddot"][:, k0:k0 + n_steps + 1])
     return RolloutResult(_histories(net, hs, sol, mass, mode, known), prediction, sol, saw)
