@@ -81,8 +81,8 @@ DEFERRED: dict[str, tuple[str, ...]] = {
 }
 
 #: functions with a violation (a function-level import that defers nothing optional, or over
-#: MAX_LINES lines) in files other helpers are editing at the same time (issue 31 items 2, 3,
-#: 7), to be cleared after their merge; an entry that no longer violates fails the test
+#: MAX_LINES lines) in files other helpers are editing at the same time (issue 31), to be
+#: cleared after their merge; an entry that no longer violates fails the test
 PENDING: dict[str, tuple[str, ...]] = {
     "commands/diagnose.py": ("_coefficients", "_known", "_load", "_prepare", "_stability",
                              "add_arguments", "diagnose", "example_history", "run"),
