@@ -91,7 +91,7 @@ def _execute(p: Plan, *, cache_dir: str | os.PathLike | None, progress: bool, us
         # a result solved in two parts may be shipped as one file of the joined result
         whole = shipped(p.input_hash) if use_cache else None
         if whole is not None:
-            _warn_flags(whole, "shipped")
+            _warn_flags(whole, "shipped", stacklevel=4)
             return whole
         low, high = p.parts
         return join_depths(None if low is None else _execute(low, **run), _execute(high, **run),
@@ -126,11 +126,12 @@ def _cached_result(p: Plan, final_path: Path) -> xr.Dataset | None:
     cached = read_cache(final_path)
     if cached is None or cached.attrs.get("input_hash") != p.input_hash:
         return None
-    _warn_flags(cached, "cached")
+    _warn_flags(cached, "cached", stacklevel=5)
     return cached
 
 
-def _warn_flags(ds: xr.Dataset, origin: str) -> None:
-    """The quality flags of a result read from a file, warned again (they were at its solve)."""
+def _warn_flags(ds: xr.Dataset, origin: str, stacklevel: int) -> None:
+    """The quality flags of a result read from a file, warned again (they were at its solve);
+    ``stacklevel`` points at the caller of :func:`compute`."""
     for flag in json.loads(ds.attrs.get("quality_flags", "[]")):
-        warnings.warn(f"BEM coefficients ({origin}): {flag}", stacklevel=4)
+        warnings.warn(f"BEM coefficients ({origin}): {flag}", stacklevel=stacklevel)
