@@ -69,7 +69,7 @@ def test_compute_returns_the_shipped_file_without_solving(tmp_path, monkeypatch)
     def refuse(*args, **kwargs):
         raise AssertionError("BEM solve attempted")
 
-    monkeypatch.setattr(bem, "_solve_missing", refuse)
+    monkeypatch.setattr(bem.run, "solve_missing", refuse)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds = bem.compute(**bem_arguments(CASE), cache_dir=tmp_path, progress=False)

@@ -79,7 +79,8 @@ from hybridwsi.history import TextTable, quantity_of, units_attrs
 from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.hydro.formats import read_coefficients
-from hybridwsi.hydro.statespace import RadiationSS
+from hybridwsi.hydro.irf import radiation_irf
+from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 from hybridwsi.hydro.strip import case_elements, with_slender_members
 from hybridwsi.importers import read_elevation
 from hybridwsi.waves import ElevationRecord, Wave
@@ -251,9 +252,6 @@ def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
     fit_radiation_ss` with every DOF weighed alike), for multi-DOF kernels the default fit
     does not capture (the OC4 semi: docs/OC4_SEMI.md)."""
     if fit:
-        from hybridwsi.hydro.irf import radiation_irf
-        from hybridwsi.hydro.statespace import fit_radiation_ss
-
         kw = {k: fit[k] for k in ("t_max", "dt") if k in fit}
         kernel = radiation_irf(coeffs, **kw).sel(radiating_dof=list(dofs),
                                                  influenced_dof=list(dofs))

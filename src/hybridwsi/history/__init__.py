@@ -9,7 +9,7 @@ force components, optional ``mass``; units per DOF). The package is split along 
   that may be pooled) and :func:`check_regressors` (data a fit can use);
 - :mod:`~hybridwsi.files`: atomic writers (:func:`atomic_write`, :func:`write_json`,
   :func:`write_text`) and the NetCDF round trip (:func:`to_netcdf`, :func:`read_netcdf`);
-- :mod:`~hybridwsi.history.units`: the one unit table (:data:`UNIT_FACTORS`,
+- :mod:`~hybridwsi.units`: the one unit table (:data:`UNIT_FACTORS`,
   :func:`unit_factor`) and :func:`to_si` (a whole history in SI, unknown units refused);
 - :mod:`~hybridwsi.history.text`: text tables with units in their headers
   (:class:`TextTable`, :func:`read_csv`, :func:`to_csv`);
@@ -72,7 +72,7 @@ from hybridwsi.history.text import (
     split_header,
     to_csv,
 )
-from hybridwsi.history.units import (
+from hybridwsi.units import (
     SI_UNITS,
     UNIT_FACTORS,
     check_si,

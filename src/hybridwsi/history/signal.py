@@ -23,7 +23,7 @@ import xarray as xr
 
 from hybridwsi.errors import InputError
 from hybridwsi.history.model import check_regressors, is_uniform, time_step, units_attrs, validate
-from hybridwsi.history.units import to_si
+from hybridwsi.units import to_si
 
 # --------------------------------------------------------------------------------------------
 # Derivative estimation
@@ -250,7 +250,7 @@ def finalize_import(
     """Convert a freshly imported history to SI and validate it; resample it first when asked
     and irregular.
 
-    Used by every ``read_*`` function so that units (:func:`hybridwsi.history.units.to_si`:
+    Used by every ``read_*`` function so that units (:func:`hybridwsi.units.to_si`:
     NetCDF ``units`` attributes honoured, unknown ones refused) and irregular sampling are
     handled the same way: irregular sampling is rejected with a clear message unless
     ``resample_to_uniform`` (or ``require_uniform=False``).

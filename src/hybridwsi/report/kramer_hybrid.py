@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi.history import to_netcdf, write_json, write_text
 from hybridwsi.surrogate.kramer import LPF_REFERENCE, run_study
 
 _CURVE_LABELS = {"physics": "BEM/Cummins, exact hydrostatics (physics)",
@@ -295,7 +296,6 @@ def run_kramer_hybrid(out: Path, *, quick: bool = False, progress: bool = True) 
     progress : bool
         Print one line per stage.
     """
-    from hybridwsi.history import to_netcdf, write_json, write_text
     from hybridwsi.report import plots
 
     out = Path(out)

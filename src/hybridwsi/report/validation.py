@@ -17,6 +17,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi import bodies, cummins
+from hybridwsi.cases import load_case
 from hybridwsi.errors import InputError
 from hybridwsi.history import fit_damped_oscillator
 from hybridwsi.history.signal import crossing_period, rms_heave_error
@@ -26,6 +28,7 @@ from hybridwsi.importers.kramer import (
     read_kramer_drop,
     read_kramer_numerical,
 )
+from hybridwsi.sph.decay import first_extrema, grid_convergence
 
 DROPS = KRAMER_DROPS
 
@@ -136,8 +139,6 @@ def decay_measures(t: np.ndarray, zn: np.ndarray, te0: float, measured: xr.Datas
         the first ``trough`` [-] and its time ``trough_t`` [s]; ``rms`` over [0, rms_window te0]
         as :func:`rms_heave_error` (NaN when the record is shorter).
     """
-    from hybridwsi.sph.decay import first_extrema  # pure NumPy; no PySPH
-
     t, zn = np.asarray(t, float), np.asarray(zn, float)
     fit = fit_damped_oscillator(t, zn, te0, (0.0, fit_window * te0))
     after = t >= 0.0  # a measured record starts before the release
@@ -200,8 +201,6 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
         the extrapolated value, the GCI of the finest run [%] and whether the three are
         monotone (in the asymptotic range; otherwise the GCI is not to be trusted).
     """
-    from hybridwsi.sph.decay import grid_convergence  # pure NumPy; no PySPH
-
     if len(rows) < 3:
         raise InputError(f"a grid convergence index needs runs at three spacings, got {len(rows)}")
     dps = sorted(rows)[:3]
@@ -214,6 +213,25 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
                      f"{g['extrapolated']:.4f} | {100 * g['gci_fine']:.2f} % | "
                      f"{'yes' if g['monotone'] else 'no'} |")
     return "\n".join(lines)
+
+
+def _experiment_curves(measured: dict[str, xr.Dataset], drops: tuple[str, ...], te0: float
+                       ) -> xr.Dataset:
+    """The measured heave / H0 (mean and 95 % band) of each drop on its own t / Te0 grid."""
+    return xr.concat(
+        [
+            xr.Dataset(
+                {
+                    "exp_mean": ("t_exp", measured[d]["z"].values[:, 0]),
+                    "exp_ci95_lower": ("t_exp", measured[d]["ci95_lower"].values.ravel()),
+                    "exp_ci95_upper": ("t_exp", measured[d]["ci95_upper"].values.ravel()),
+                },
+                coords={"t_exp": measured[d]["time"].values / te0},
+            )
+            for d in drops
+        ],
+        dim=pd.Index(list(drops), name="drop_test"),
+    )
 
 
 def run_decay_validation(
@@ -240,9 +258,6 @@ def run_decay_validation(
         Show a progress bar over the runs.
     """
     from tqdm.auto import tqdm
-
-    from hybridwsi import bodies, cummins
-    from hybridwsi.cases import load_case
 
     case = load_case("kramer2021_decay")
     te0 = case["experiment"]["Te0"]
@@ -293,20 +308,7 @@ def run_decay_validation(
     model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
         "heave_over_H0"
     ]
-    exp_ds = xr.concat(
-        [
-            xr.Dataset(
-                {
-                    "exp_mean": ("t_exp", exp_cache[d]["z"].values[:, 0]),
-                    "exp_ci95_lower": ("t_exp", exp_cache[d]["ci95_lower"].values.ravel()),
-                    "exp_ci95_upper": ("t_exp", exp_cache[d]["ci95_upper"].values.ravel()),
-                },
-                coords={"t_exp": exp_cache[d]["time"].values / te0},
-            )
-            for d in drops
-        ],
-        dim=pd.Index(list(drops), name="drop_test"),
-    )
+    exp_ds = _experiment_curves(exp_cache, drops, te0)
     ds = xr.merge([exp_ds, model])
     ds["t_exp"].attrs.update(units="1", long_name="t / Te0")
     ds.attrs.update(te0=te0, rms_window=str(window), dt=dt)

@@ -51,7 +51,7 @@ import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -74,9 +74,9 @@ from hybridwsi.forces.morison import MorisonDrag
 from hybridwsi.history import nrms_percent
 from hybridwsi.waves import JONSWAP
 
-if TYPE_CHECKING:  # torch: the optional "ml" extra
-    from hybridwsi.surrogate.network import ForceNetwork
-    from hybridwsi.surrogate.rollout import RolloutResult
+from hybridwsi.surrogate.network import ForceNetwork  # torch itself is loaded when used
+from hybridwsi.surrogate.pipeline import predict_stability
+from hybridwsi.surrogate.rollout import RolloutResult, rollout
 
 #: growth of the lagged run's error over its initial perturbation that counts as "blew up"
 GROWTH_LIMIT = 1e3
@@ -307,9 +307,6 @@ def checked_rollout(net: ForceNetwork, cases: Sequence[xr.Dataset],
         Predictor-corrector passes (1 outside ``corrected``).
     result : RolloutResult
     """
-    from hybridwsi.surrogate.pipeline import predict_stability
-    from hybridwsi.surrogate.rollout import rollout
-
     refs = [reference] if isinstance(reference, xr.Dataset) else list(reference)
     pred, n_corr = predict_stability(net, refs, mass=mass, known=known, mode=mode,
                                      stride=stride)
@@ -328,8 +325,6 @@ def run_partition(name: str, known: Sequence[KnownComponent], net_kw: Mapping[st
 
     Returns the JSON entry, the network and the ``mode`` rollout (for the figure).
     """
-    from hybridwsi.surrogate.network import ForceNetwork
-
     t0 = time.time()
     net = ForceNetwork(**{**net_kw, "inputs": tuple(net_kw["inputs"])}).fit(
         list(train), "F_bb", known=list(known))

@@ -49,7 +49,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import bodies, cummins
 from hybridwsi._meta import version
+from hybridwsi.cases import load_case
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import (
     AddedMass,
@@ -67,6 +69,7 @@ from hybridwsi.history import (
     rms_heave_error,
 )
 from hybridwsi.diagnostic import regress
+from hybridwsi.hydro import bem, coefficients
 from hybridwsi.importers.kramer import (
     KRAMER_DROPS,
     kramer_numerical_files,
@@ -186,9 +189,6 @@ class HydrostaticRemainder(KnownComponent):
 
 def kramer_setup(progress: bool = False) -> KramerSetup:
     """Case file ``kramer2021_decay``, its shipped BEM coefficients and the radiation fit."""
-    from hybridwsi import bodies, cummins
-    from hybridwsi.cases import load_case
-    from hybridwsi.hydro import bem, coefficients
 
     case = load_case("kramer2021_decay")
     cfg = case["bem"]

@@ -199,6 +199,9 @@ def fit_output_error(setup: KramerSetup, targets: dict[str, tuple[np.ndarray, np
                      ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Refine the structured coefficients by least squares on the simulated heave.
 
+    It reads better whole: its closures (coefficient scaling, residuals, the cached batched
+    finite-difference Jacobian) share the fit's state and make sense only together.
+
     Minimises Σ_drops Σ_t (z_model(t)/H0 − z_meas(t)/H0)² over the ``free`` coefficients
     (others stay at ``coef0``): the simulation error, not the one-step force error, so
     derivative errors of the measured z do not bias the fit. The Jacobian is by forward
