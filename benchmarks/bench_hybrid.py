@@ -142,14 +142,14 @@ def _linear_stepper(setup: Setup) -> Figure:
     run = setup.hybrid(1, "lagged", False)
 
     def linear(n: int) -> object:
-        orig = ro._torch_force
-        ro._torch_force = lambda _net: (lambda x: x @ jac.T)
+        orig = ro.network_force
+        ro.network_force = lambda _net: (lambda x: x @ jac.T)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 return run(n)
         finally:
-            ro._torch_force = orig
+            ro.network_force = orig
     return marginal(linear, *N_NUMPY)
 
 

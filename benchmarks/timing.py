@@ -5,7 +5,8 @@ benchmark's unit: a call, a case-step, a simulated second...) and hands a baseli
 candidates to :func:`compare`, which
 
 - times each figure by repeating its call until the sample lasts at least ``min_time``
-  (0.2 s): a call of 3 ms timed once is at the mercy of one scheduler tick;
+  (0.2 s): a call of 3 ms timed once is at the mercy of one scheduler tick; the sample is
+  the median time per call over the blocks of calls it is made of (:func:`sample`);
 - takes ``repeat`` (at least 5) samples, **alternating** baseline and candidates within each
   round, so a load that comes and goes slows both sides alike;
 - reports per figure the median time per unit and, per candidate, the median of the per-round
@@ -21,6 +22,7 @@ for anything multi-threaded or multi-process, whose CPU time adds up over thread
 
 from __future__ import annotations
 
+import gc
 import os
 import time
 from collections.abc import Callable, Mapping
@@ -31,20 +33,42 @@ import numpy as np
 #: shortest sample [s] and fewest samples per figure (issue 31 item 6)
 MIN_TIME = 0.2
 REPEAT = 5
+#: shortest timed block of calls within a sample [s] (clock overhead and resolution negligible)
+BLOCK_TIME = 1e-3
 
 Clock = Callable[[], float]
 
 
 def sample(fn: Callable[[], object], min_time: float = MIN_TIME,
            clock: Clock = time.perf_counter) -> float:
-    """Seconds per call of ``fn``, calling it until the sample lasts ``min_time`` [s]."""
-    calls, start = 0, clock()
-    while True:
-        fn()
-        calls += 1
-        elapsed = clock() - start
-        if elapsed >= min_time:
-            return elapsed / calls
+    """Seconds per call of ``fn``, calling it until the sample lasts ``min_time`` [s].
+
+    The calls are timed in blocks of at least :data:`BLOCK_TIME` (one call when a call is
+    longer) and the sample is the median block's time per call: one call stalled by another
+    job (a page-fault storm, a descheduled core) does not move it, as it would move the mean
+    of three 70 ms calls. The garbage collector is run before and kept off during the sample
+    (as ``timeit`` does): a collection of the previous figure's objects would otherwise land
+    in a random sample.
+    """
+    gc.collect()
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        block, total, per_call = 1, 0.0, []
+        while total < min_time or not per_call:
+            start = clock()
+            for _ in range(block):
+                fn()
+            elapsed = clock() - start
+            total += elapsed
+            if elapsed < BLOCK_TIME and not per_call:
+                block *= 2  # still calibrating: too short to time reliably
+                continue
+            per_call.append(elapsed / block)
+        return float(np.median(per_call))
+    finally:
+        if enabled:
+            gc.enable()
 
 
 @dataclass(frozen=True)
