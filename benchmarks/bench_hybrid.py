@@ -2,10 +2,10 @@
 
 Targets (issue 14): one case <= 3x and a 32-case batch <= 1.5x the Cummins step per case-step.
 Everything runs in this process on the same synthetic sphere-like body, and every number is a
-*marginal* cost: the difference of the CPU times of runs of 20 000 and 2 000 steps, divided by
-the extra case-steps, so one-off set-up (history metadata, Numba dispatch) cancels on both
+*marginal* cost: the difference of the CPU times of runs of 20 000 and 2 000 steps (1 case;
+4 000 and 400 for 32 cases), divided by the extra case-steps, so one-off set-up (history metadata, Numba dispatch) cancels on both
 sides alike. Timing (``benchmarks/timing.py``): each run repeated until its sample lasts
->= 0.2 s, 5 rounds alternating baseline and candidates, median ratio with its spread (issue 31:
+>= 0.2 s, 11 rounds alternating baseline and candidates, median ratio with its spread (issue 31:
 the 1-case baseline, 18 000 steps of 0.1-0.3 us timed once, gave 1.2x-5.3x run to run).
 
 - Cummins (the baseline): ``cummins.simulate`` (1 case) / ``cummins.simulate_batch`` (32
@@ -56,10 +56,15 @@ from hybridwsi.surrogate.network import ForceNetwork
 
 torch.set_num_threads(1)
 DT = 0.02
-N_LONG, N_SHORT = 20000, 2000  # steps of the two runs of a marginal figure
+N_LONG, N_SHORT = 20000, 2000  # steps of the two runs of a marginal figure, 1 case
+#: the same for 32 cases: calls of ~20 ms, so that a 0.2 s sample is the median of ~10 calls
+#: (20 000 steps: 3 calls of 75 ms, and one stalled call moved the median of a sample)
+N_BATCH = (4000, 400)
 N_NUMPY = (4000, 1000)  # the same for the (slower) NumPy stepper
 N_CASES = 32
 GROUPS = ("one", "batch", "numpy", "core", "wave")
+#: rounds: more than the harness's minimum, the medians then move less between runs
+REPEAT_HERE = 2 * REPEAT + 1
 CLOCK = time.process_time  # single-threaded throughout: CPU time, what sharing inflates least
 
 
@@ -90,7 +95,7 @@ class Setup:
                                     tp=0.8, duration=(N_LONG + span + 1) * DT, dt=DT,
                                     radiation_ss=self.ss)
         # inputs cut to n steps once, outside the timing (both sides get their input ready)
-        lengths = (N_LONG, N_SHORT, *N_NUMPY)
+        lengths = (N_LONG, N_SHORT, *N_BATCH, *N_NUMPY)
         self.cut = {n: [h.isel(time=slice(0, n + span + 1)) for h in self.cases]
                     for n in lengths}
         self.batch_in = {n: [{"forces": [series_force(h, n)]} for h in self.cases]
@@ -127,11 +132,17 @@ class Setup:
         return seen[-1]
 
 
+def steps(batch: int) -> tuple[int, int]:
+    """The long and short run of a marginal figure on ``batch`` cases (compiled paths)."""
+    return (N_LONG, N_SHORT) if batch == 1 else N_BATCH
+
+
 def _kernel_figure(setup: Setup, batch: int) -> Figure:
     """The compiled loop alone (marginal per case-step) on a rollout's own arguments."""
-    long_, short = setup.kernel_args(batch, N_LONG), setup.kernel_args(batch, N_SHORT)
-    return Figure(lambda: fast.run_explicit(*long_), N_LONG * batch,
-                  lambda: fast.run_explicit(*short), N_SHORT * batch)
+    n_long, n_short = steps(batch)
+    long_, short = setup.kernel_args(batch, n_long), setup.kernel_args(batch, n_short)
+    return Figure(lambda: fast.run_explicit(*long_), n_long * batch,
+                  lambda: fast.run_explicit(*short), n_short * batch)
 
 
 def _linear_stepper(setup: Setup) -> Figure:
@@ -153,37 +164,44 @@ def _linear_stepper(setup: Setup) -> Figure:
     return marginal(linear, *N_NUMPY)
 
 
-def figures(setup: Setup, group: str) -> tuple[str, Figure, dict[str, Figure]]:
-    """(baseline label, baseline, candidates) of one group (module doc)."""
-    base1 = marginal(setup.cummins(1), N_LONG, N_SHORT)
-    base32 = marginal(setup.cummins(N_CASES), N_LONG, N_SHORT, N_CASES)
-    if group in ("one", "batch"):
-        batch = 1 if group == "one" else N_CASES
-        cands = {f"hybrid {mode:9s} compiled, {batch:2d} case(s)":
-                 marginal(setup.hybrid(batch, mode), N_LONG, N_SHORT, batch)
-                 for mode in ("lagged", "corrected")} if fast.HAVE_NUMBA else {}
-        return (f"Cummins state space, F_exc series, {batch:2d} case(s)",
-                base1 if batch == 1 else base32, cands)
+Comparison = tuple[str, Figure, dict[str, Figure]]  # baseline label, baseline, candidates
+
+
+def figures(setup: Setup, group: str) -> list[Comparison]:
+    """The comparisons of one group (module doc), each timed in its own alternating rounds."""
+    base = {b: (f"Cummins state space, F_exc series, {b:2d} case(s)",
+                marginal(setup.cummins(b), *steps(b), b)) for b in (1, N_CASES)}
     if group == "numpy":
-        cands = {f"hybrid {mode:9s} NumPy,    {b:2d} case(s)":
-                 marginal(setup.hybrid(b, mode, False), *N_NUMPY, b)
-                 for b in (1, N_CASES) for mode in ("lagged", "corrected")}
-        cands["stepper lagged, linear force, 1 case"] = _linear_stepper(setup)
-        return "Cummins state space, F_exc series,  1 case(s)", base1, cands
+        out = []
+        for b in (1, N_CASES):
+            cands = {f"hybrid {mode:9s} NumPy,    {b:2d} case(s)":
+                     marginal(setup.hybrid(b, mode, False), *N_NUMPY, b)
+                     for mode in ("lagged", "corrected")}
+            if b == 1:
+                cands["stepper lagged, linear force, 1 case"] = _linear_stepper(setup)
+            out.append((*base[b], cands))
+        return out
     if group == "core":
+        n_long, n_short = steps(N_CASES)
         u = {n: np.stack([h["F_exc"].values[:n + 1] for h in setup.cases])
-             for n in (N_LONG, N_SHORT)}  # (n_case, nt, 1)
+             for n in (n_long, n_short)}  # (n_case, nt, 1)
         zero = np.zeros((N_CASES, 1))
         core = marginal(lambda n: solvers.solve_linear(setup.sysm, u[n], zero, zero, DT),
-                        N_LONG, N_SHORT, N_CASES)
+                        n_long, n_short, N_CASES)
         cands = {f"core: hybrid compiled loop (run_explicit), {b:2d}": _kernel_figure(setup, b)
                  for b in (N_CASES, 1)} if fast.HAVE_NUMBA else {}
-        return "core: Cummins modal solver (solve_linear), 32", core, cands
-    wave = waves.JONSWAP(hs=0.05, tp=0.8, seed=1)
-    old = lambda n: cummins.simulate(setup.co, mass=sh.M, duration=n * DT, dt=DT,  # noqa: E731
-                                     wave=wave, radiation_ss=setup.ss)
-    return ("Cummins state space, F_exc series,  1 case(s)", base1,
-            {"old baseline: JONSWAP synthesised in the run": marginal(old, N_LONG, N_SHORT)})
+        return [("core: Cummins modal solver (solve_linear), 32", core, cands)]
+    if group == "wave":
+        wave = waves.JONSWAP(hs=0.05, tp=0.8, seed=1)
+        old = lambda n: cummins.simulate(setup.co, mass=sh.M, duration=n * DT,  # noqa: E731
+                                         dt=DT, wave=wave, radiation_ss=setup.ss)
+        return [(*base[1], {"old baseline: JONSWAP synthesised in the run":
+                            marginal(old, N_LONG, N_SHORT)})]
+    b = 1 if group == "one" else N_CASES
+    cands = {f"hybrid {mode:9s} compiled, {b:2d} case(s)":
+             marginal(setup.hybrid(b, mode), *steps(b), b)
+             for mode in ("lagged", "corrected")} if fast.HAVE_NUMBA else {}
+    return [(*base[b], cands)]
 
 
 def _print(group: str, base_label: str, res: dict[str, Timing]) -> None:
@@ -209,7 +227,8 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default=",".join(GROUPS),
                     help=f"comma-separated groups to time, of {', '.join(GROUPS)}")
-    ap.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
+    ap.add_argument("--repeat", type=int, default=REPEAT_HERE,
+                    help=f"alternating rounds (default {REPEAT_HERE})")
     args = ap.parse_args(argv)
     groups = [g for g in args.only.split(",") if g]
     unknown = sorted(set(groups) - set(GROUPS))
@@ -220,10 +239,11 @@ def main(argv: list[str] | None = None) -> None:
         print("Numba not installed: no compiled loop (pip install numba)")
     results = {}
     for group in groups:
-        base_label, base, cands = figures(setup, group)
-        results[group] = compare(base, cands, repeat=args.repeat, clock=CLOCK,
-                                 baseline_label=base_label)
-        _print(group, base_label, results[group])
+        for base_label, base, cands in figures(setup, group):
+            res = compare(base, cands, repeat=args.repeat, clock=CLOCK,
+                          baseline_label=base_label)
+            results.setdefault(group, {}).update(res)
+            _print(group, base_label, res)
     _verdicts(results)
     print(conditions(CLOCK, args.repeat))
 
