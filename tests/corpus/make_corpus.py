@@ -388,6 +388,23 @@ BAD_OPTIONS: dict[str, list[str]] = {
                             "{out}/s"],
     "sweep-ramp-neg": ["sweep", "--hs", "0.1", "--tp", "1", "--ramp", "-1", "--out", "{out}/s"],
     "sweep-mass-neg": ["sweep", "--hs", "0.1", "--tp", "1", "--mass", "-1", "--out", "{out}/s"],
+    # absurd magnitudes: refused with the range (issue 31 item 7)
+    "sweep-hs-huge": ["sweep", "--hs", "1e300", "--tp", "1", "--out", "{out}/s"],
+    "sweep-hs-above-record": ["sweep", "--hs", "0.1,31", "--tp", "1", "--out", "{out}/s"],
+    "sweep-mass-huge": ["sweep", "--hs", "0.1", "--tp", "1", "--mass", "1e300", "--out",
+                        "{out}/s"],
+    "diagnose-mass-huge": ["diagnose", "--example", "--mass", "1e300"],
+    "diagnose-mass-tiny": ["diagnose", "--example", "--mass", "1e-300"],
+    "simulate-mass-huge": ["simulate", "--coeffs", "good_coeffs.nc", "--mass", "1e11", "--out",
+                           "{out}/h.nc"],
+    "import-mass-huge": ["import", "good_hist.csv", "--mass", "1e300", "--out", "{out}/h.nc"],
+    "select-mass-huge": ["select", "good_hist.nc", "--mass", "1e300"],
+    "bem-mass-huge": ["bem", "--mass", "1e300", "--out", "{out}/c.nc"],
+    # every case fails on the workers: one line (no worker "Compute Failed" traceback), no
+    # manifest or parts left behind (a LocalCluster of one worker: ~10 s)
+    "sweep-every-case-fails": ["sweep", "--hs", "25", "--tp", "0.8", "--nonlinear-hydrostatics",
+                               "--duration", "2", "--workers", "1", "--quiet", "--out",
+                               "{out}/s"],
     "sweep-dofs-surge": ["sweep", "--hs", "0.1", "--tp", "1", "--dofs", "Surge", "--out",
                          "{out}/s"],
     "sweep-case-unknown": ["sweep", "--case", "nope", "--hs", "1", "--tp", "10", "--out",
