@@ -405,3 +405,50 @@ def test_output_through_a_link_writes_where_it_points(tmp_path):
     assert target.read_bytes()[:4] == b"\x89HDF"  # the history, in the file linked to
     assert sorted(p.name for p in tmp_path.iterdir()) == ["h.nc", "results"]
     assert sorted(p.name for p in target.parent.iterdir()) == ["h.nc"]  # no temporary left
+
+
+# ------------------------------------------------- end-of-run warnings (issue 31 item 8)
+def test_end_of_run_warnings_are_printed_once_and_notes_as_notes():
+    import warnings
+
+    from hybridwsi.errors import Note
+
+    def command(_args):
+        for _ in range(2):  # one flag raised by two steps of a run (from two call sites)
+            warnings.warn("BEM coefficients (cached): added_mass_zero is NaN", UserWarning)
+        warnings.warn("BEM coefficients (cached): added_mass_zero is NaN", UserWarning,
+                      stacklevel=2)
+        warnings.warn("something else", UserWarning)
+        warnings.warn(Note("A(0) is not used"))
+        return 0
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert cli._run(argparse.Namespace(_run=command)) == 0
+    texts = [str(w.message) for w in caught]
+    assert texts == ["BEM coefficients (cached): added_mass_zero is NaN", "something else",
+                     "A(0) is not used"]
+    lines = [cli._format_warning(w.message, w.category, w.filename, w.lineno) for w in caught]
+    assert lines[0].startswith("warning: ") and lines[2] == "note: A(0) is not used\n"
+
+
+def test_reproduce_words_the_unused_a0_flag_as_information(tmp_path, monkeypatch):
+    import warnings
+
+    from hybridwsi.commands import reproduce as command
+    from hybridwsi.errors import Note
+    from hybridwsi.report import reproduce as report
+
+    def run(out, **_kw):  # the BEM flag of the finite-depth sphere, from its two loads
+        for _ in range(2):
+            warnings.warn("BEM coefficients (cached): added_mass_zero is NaN (not computable "
+                          "for this water depth/Green function)", UserWarning)
+        warnings.warn("a real problem", UserWarning)
+
+    monkeypatch.setattr(report, "run", run)
+    args = cli.build_parser().parse_args(["reproduce", "--quick", "--out", str(tmp_path / "r")])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert cli._run(args) == 0
+    kinds = [(w.category, str(w.message)) for w in caught]
+    assert kinds == [(Note, command.A0_NOTE), (UserWarning, "a real problem")]
