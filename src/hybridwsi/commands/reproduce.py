@@ -60,8 +60,8 @@ def check_inputs(args: argparse.Namespace) -> None:
 #: a BEM quality flag the report has no use for: A(0) (its radiation comes from A∞ and the
 #: impulse response), printed as information rather than as a problem
 UNUSED_A0 = "added_mass_zero is NaN"
-A0_NOTE = ("BEM coefficients: A(0) (added_mass_zero) is not computable for a finite water depth "
-           "with this Green function; the report does not use A(0)")
+A0_NOTE = ("BEM coefficients: A(0) (added_mass_zero) is not computable for this water depth "
+           "and Green function; the report does not use A(0)")
 
 
 def run(args: argparse.Namespace) -> int:
