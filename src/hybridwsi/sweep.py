@@ -476,11 +476,7 @@ def run_sweep(
     fresh = [p for p in (out, *out.parents) if not p.exists()]
     # the Dask client first: an unreachable scheduler is one line with nothing written
     with _connected(scheduler if todo else SYNCHRONOUS, n_workers) as client:
-        (out / PARTS).mkdir(parents=True, exist_ok=True)
-        for stale in (out / PARTS).glob(".*.tmp"):  # half-written parts of a killed run
-            stale.unlink(missing_ok=True)
-        clean_partials(out)
-        _write_manifest(out, cases, current, status="running")
+        _start(out, cases, current)
         try:
             failures = _run_cases(todo, config, shared, out, runner, client, len(cases),
                                   progress)
@@ -499,6 +495,16 @@ def run_sweep(
     _write_manifest(out, cases, current, status="complete",
                     statistics=sea_statistics(open_sweep(path), start=config.ramp))
     return path
+
+
+def _start(out: Path, cases: Sequence[dict], current: dict) -> None:
+    """``parts/`` ready (half-written parts and stores of a killed run removed) and the
+    manifest written with status "running"."""
+    (out / PARTS).mkdir(parents=True, exist_ok=True)
+    for stale in (out / PARTS).glob(".*.tmp"):
+        stale.unlink(missing_ok=True)
+    clean_partials(out)
+    _write_manifest(out, cases, current, status="running")
 
 
 def _forget_empty(out: Path, fresh: Sequence[Path]) -> bool:
