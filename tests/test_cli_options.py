@@ -353,6 +353,16 @@ def test_absurd_magnitudes_are_refused_with_the_range(kind, text):
         assert "between" in str(err.value), err.value
 
 
+def test_absurd_seas_are_refused_by_the_wave_models_too():
+    # what simulate --jonswap/--regular and the sweep's workers build
+    from hybridwsi import waves
+
+    for build in (lambda: waves.JONSWAP(hs=1e300, tp=8.0), lambda: waves.Regular(8.0, 31.0)):
+        with pytest.raises(InputError, match="at most 30 m"):
+            build()
+    assert waves.JONSWAP(hs=19.0, tp=16.0).hs == 19.0
+
+
 def test_magnitudes_of_real_bodies_and_seas_pass():
     # a 7 kg model sphere, the 657 000 t Seawise Giant; the paper's 5 cm sea, a 19 m Hs record
     assert o.mass("7.06") == 7.06 and o.mass("6.57e8") == 6.57e8

@@ -400,6 +400,10 @@ BAD_OPTIONS: dict[str, list[str]] = {
     "import-mass-huge": ["import", "good_hist.csv", "--mass", "1e300", "--out", "{out}/h.nc"],
     "select-mass-huge": ["select", "good_hist.nc", "--mass", "1e300"],
     "bem-mass-huge": ["bem", "--mass", "1e300", "--out", "{out}/c.nc"],
+    "simulate-jonswap-hs-huge": ["simulate", "--coeffs", "good_coeffs.nc", "--jonswap", "1e300",
+                                 "8", "--out", "{out}/h.nc"],
+    "simulate-regular-height-huge": ["simulate", "--coeffs", "good_coeffs.nc", "--regular", "8",
+                                     "31", "--out", "{out}/h.nc"],
     # every case fails on the workers: one line (no worker "Compute Failed" traceback), no
     # manifest or parts left behind (a LocalCluster of one worker: ~10 s)
     "sweep-every-case-fails": ["sweep", "--hs", "25", "--tp", "0.8", "--nonlinear-hydrostatics",

@@ -22,6 +22,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from hybridwsi.errors import InputError
+from hybridwsi.limits import MASS_RANGE, MAX_WAVE_HEIGHT
 
 
 
@@ -70,14 +71,6 @@ def fraction(text: str) -> float:
     if not 0 < value < 1:
         raise argparse.ArgumentTypeError(f"must be between 0 and 1 (exclusive), got {text!r}")
     return value
-
-
-#: masses [kg] of floating bodies: from a 1 g tank model to 10 million tonnes (15 times the
-#: largest ship ever built, Seawise Giant, 657 000 t loaded); beyond it a value is a typo
-MASS_RANGE = (1e-3, 1e10)
-#: wave heights [m]: the highest wave measured at sea is about 30 m (Hs records near 19 m);
-#: a significant or regular height beyond it is a typo
-MAX_WAVE_HEIGHT = 30.0
 
 
 def mass(text: str) -> float:
