@@ -94,7 +94,8 @@ def main() -> None:
         if c % 2:
             cases.append({"z0": float(rng.uniform(-0.03, 0.03))})
         else:
-            cases.append({"wave": Regular(float(rng.uniform(0.6, 1.5)), float(rng.uniform(0.01, 0.06)))})
+            cases.append({"wave": Regular(float(rng.uniform(0.6, 1.5)),
+                                          float(rng.uniform(0.01, 0.06)))})
     bkw = dict(duration=args.batch_duration, dt=args.dt, ramp=2.0, radiation_ss=ss)
     last = {}
     t = compare(Figure(lambda: cummins.simulate(co, **cases[0], **bkw)),

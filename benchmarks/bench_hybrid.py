@@ -3,10 +3,12 @@
 Targets (issue 14): one case <= 3x and a 32-case batch <= 1.5x the Cummins step per case-step.
 Everything runs in this process on the same synthetic sphere-like body, and every number is a
 *marginal* cost: the difference of the CPU times of runs of 100 000 and 2 000 steps (1 case;
-4 000 and 400 for 32 cases), divided by the extra case-steps, so one-off set-up (history metadata, Numba dispatch) cancels on both
-sides alike. Timing (``benchmarks/timing.py``): each run repeated until its sample lasts
->= 0.2 s, 11 rounds alternating baseline and candidates, median ratio with its spread (issue 31:
-the 1-case baseline, 18 000 steps of 0.1-0.3 us timed once, gave 1.2x-5.3x run to run).
+4 000 and 400 for 32 cases), divided by the extra case-steps, so one-off set-up (history
+metadata, Numba dispatch) cancels on both sides alike. Timing (``benchmarks/timing.py``):
+each run repeated until its sample lasts >= 0.2 s, 11 rounds alternating baseline and
+candidates, median ratio with its spread (issue 31: the 1-case baseline, 18 000 steps of
+0.1-0.3 us timed once, gave the lagged ratio as 1.2x-5.3x run to run; now three runs in a row
+at load 4-9 give 2.63x, 2.54x, 2.98x, the Cummins step itself moving by +-10 %).
 
 - Cummins (the baseline): ``cummins.simulate`` (1 case) / ``cummins.simulate_batch`` (32
   cases), linear, radiation state space, driven by **the same input the hybrid gets**: each
