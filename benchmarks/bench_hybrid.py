@@ -8,7 +8,8 @@ metadata, Numba dispatch) cancels on both sides alike. Timing (``benchmarks/timi
 each run repeated until its sample lasts >= 0.2 s, 11 rounds alternating baseline and
 candidates, median ratio with its spread (issue 31: the 1-case baseline, 18 000 steps of
 0.1-0.3 us timed once, gave the lagged ratio as 1.2x-5.3x run to run; now three runs in a row
-at load 4-9 give 2.63x, 2.54x, 2.98x, the Cummins step itself moving by +-10 %).
+give 2.63x, 2.54x, 2.98x at load 4-9 and 3.36x, 3.48x, 3.40x at load 2-3.6: the Cummins
+step, memory-bound, is what load slows most).
 
 - Cummins (the baseline): ``cummins.simulate`` (1 case) / ``cummins.simulate_batch`` (32
   cases), linear, radiation state space, driven by **the same input the hybrid gets**: each
