@@ -3,23 +3,28 @@ full (non-symmetric) mesh, both with the same panels, lid and direct method.
 
 The baseline is timed on a few frequencies only (20-45 s and ~2 GB each at 6400 panels) and
 extrapolated to the full frequency list; ours runs the full list (cache disabled). Both are
-measured in the same process. Usage::
+measured in the same process, ``--repeat`` rounds alternating them (``benchmarks/timing.py``:
+medians, speed-up with its spread). Usage::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bem.py            # paper set-up (~8-10 min)
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bem.py            # paper set-up (~25 min)
     python benchmarks/bench_bem.py --panels 1600 --n-omega 40         # quick look
 """
 
 from __future__ import annotations
 
 import argparse
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
-def baseline_per_omega(body, omegas, resolution) -> float:
-    """Mean wall time [s] per frequency (radiation + diffraction) of Capytaine, full mesh."""
+
+def baseline_figure(body, omegas, resolution) -> Figure:
+    """Capytaine on the full mesh (radiation + diffraction), per frequency."""
     import capytaine as cpt
 
     from hybridwsi.hydro.bem import blas_single_thread
@@ -28,10 +33,11 @@ def baseline_per_omega(body, omegas, resolution) -> float:
     solver = cpt.BEMSolver(method="direct")
     grid = xr.Dataset(coords={"omega": omegas, "radiating_dof": ["Heave"], "wave_direction": [0.0],
                               "water_depth": [np.inf], "rho": [body.rho], "g": [body.g]})
-    with blas_single_thread():
-        start = time.perf_counter()
-        solver.fill_dataset(grid, cbody, hydrostatics=False, progress_bar=False)
-        return (time.perf_counter() - start) / len(omegas)
+
+    def run() -> None:
+        with blas_single_thread():
+            solver.fill_dataset(grid, cbody, hydrostatics=False, progress_bar=False)
+    return Figure(run, len(omegas))
 
 
 def main() -> None:
@@ -42,6 +48,9 @@ def main() -> None:
     p.add_argument("--panels", type=int, default=6400)
     p.add_argument("--n-omega", type=int, default=400)
     p.add_argument("--n-baseline", type=int, default=2, help="frequencies timed for the baseline")
+    p.add_argument("--repeat", type=int, default=REPEAT,
+                   help="alternating rounds (each runs all three: about 5 min on the paper "
+                        "set-up)")
     p.add_argument("--jobs", type=int, default=None,
                    help="hybridwsi worker processes (default: automatic, all CPUs here)")
     args = p.parse_args()
@@ -50,27 +59,31 @@ def main() -> None:
     omega = np.geomspace(0.1, 40.0, args.n_omega)
     resolution = body.resolution_for(args.panels)
 
-    start = time.perf_counter()
-    ours = bem.compute(body, omega, n_panels=args.panels, use_cache=False, progress=True,
-                       n_jobs=args.jobs)
-    t_ours = time.perf_counter() - start
-    # the same sweep on one process: what the worker pool buys
-    start = time.perf_counter()
-    bem.compute(body, omega, n_panels=args.panels, use_cache=False, progress=True, n_jobs=1)
-    t_one = time.perf_counter() - start
+    last = {}
+    n_solved = args.n_omega + 2  # + omega = 0, inf
 
+    def ours(n_jobs):
+        return lambda: last.update(ours=bem.compute(body, omega, n_panels=args.panels,
+                                                    use_cache=False, progress=False,
+                                                    n_jobs=n_jobs))
     sample = np.geomspace(1.0, 20.0, args.n_baseline)
-    t_base = baseline_per_omega(body, sample, resolution)
+    t = compare(baseline_figure(body, sample, resolution),
+                {"ours": Figure(ours(args.jobs), n_solved),
+                 "one process": Figure(ours(1), n_solved)},  # what the worker pool buys
+                repeat=args.repeat, warmup=False, baseline_label="capytaine")
+    ours = last["ours"]
+    t_ours, t_one = t["ours"].median * n_solved, t["one process"].median * n_solved
+    t_base = t["capytaine"].median
     t_base_total = t_base * args.n_omega
-
     print(f"mesh: {ours.attrs['n_panels']} hull + {ours.attrs['n_lid_panels']} lid panels, "
           f"{args.n_omega} frequencies (+ omega = 0, inf)")
     print(f"hybridwsi (axisymmetric): {t_ours:8.1f} s total, {t_ours / (args.n_omega + 2):.3f} s/omega")
     print(f"  same on one process   : {t_one:8.1f} s -> workers give {t_one / t_ours:.2f} x")
     print(f"capytaine full mesh     : {t_base:8.2f} s/omega (timed on {args.n_baseline}), "
           f"extrapolated {t_base_total:8.0f} s")
-    print(f"speed-up (extrapolated) : {t_base_total / t_ours:8.1f} x")
+    print(f"speed-up (extrapolated) : {t['ours'].ratio_text(speedup=True)} per omega")
     print(f"A_inf = {float(ours['added_mass_inf'][0, 0]):.4f} kg")
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@
 1. A 2.35 M-row CSV (time, z, zdot, zddot, F_tot; ~220 MB) read by
    :func:`hybridwsi.history.read_csv` (a validated TimeHistory, floats correctly rounded:
    Apache Arrow's CSV reader) and by ``pandas.read_csv`` on the same file in the same
-   process, best of two runs each (target: ours within 2x of pandas' default parser, which
+   process, ``--repeat`` rounds alternating them (``benchmarks/timing.py``; target: ours within 2x of pandas' default parser, which
    is not correctly rounded: the benchmark prints how many of its floats differ and by how
    many units in the last place; pandas with ``float_precision="round_trip"`` is shown too).
 2. A 10 000-column CSV with the force column named (target: seconds).
@@ -17,12 +17,15 @@ from __future__ import annotations
 
 import argparse
 import resource
+import sys
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 
 def write_long(path: Path, rows: int) -> None:
@@ -49,12 +52,6 @@ def write_wide(path: Path, columns: int, rows: int = 2000) -> None:
         np.savetxt(f, data, delimiter=",", fmt="%.8g")
 
 
-def timed(fn):
-    t0 = time.perf_counter()
-    out = fn()
-    return out, time.perf_counter() - t0
-
-
 def main() -> None:
     import pandas as pd
 
@@ -63,26 +60,30 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", type=int, default=2_350_000)
     ap.add_argument("--columns", type=int, default=10_000)
+    ap.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         long_csv = Path(tmp) / "long.csv"
         write_long(long_csv, args.rows)
         size = long_csv.stat().st_size / 1e6
         print(f"long CSV: {args.rows} rows, {size:.0f} MB")
-        exact, t_pd_rt = timed(lambda: pd.read_csv(long_csv, engine="c",
-                                                   float_precision="round_trip"))
-        t_pd, t_ours = np.inf, np.inf
-        for _ in range(2):  # interleaved, best of two: the machine may be shared
-            fast, t = timed(lambda: pd.read_csv(long_csv, engine="c"))
-            t_pd = min(t_pd, t)
-            ds, t = timed(lambda: read_csv(long_csv, forces=["F_tot"]))
-            t_ours = min(t_ours, t)
+        last = {}  # the last result of each reader, for the checks below
+
+        def keep(name, read):
+            return Figure(lambda: last.__setitem__(name, read()))
+        t = compare(keep("fast", lambda: pd.read_csv(long_csv, engine="c")),
+                    {"ours": keep("ours", lambda: read_csv(long_csv, forces=["F_tot"])),
+                     "round_trip": keep("exact", lambda: pd.read_csv(
+                         long_csv, engine="c", float_precision="round_trip"))},
+                    repeat=args.repeat)  # warm-up: imports (Arrow), the file in the page cache
+        exact, fast, ds = last["exact"], last["fast"], last["ours"]
         assert ds.sizes["time"] == args.rows
-        print(f"  pandas.read_csv (default float parser):  {t_pd:7.2f} s")
-        print(f"  pandas.read_csv (round_trip floats):     {t_pd_rt:7.2f} s")
-        print(f"  hybridwsi read_csv (validated history):  {t_ours:7.2f} s")
-        print(f"  ratio ours / pandas default: {t_ours / t_pd:.2f} (target <= 2); "
-              f"ours / pandas round_trip: {t_ours / t_pd_rt:.2f}")
+        print(f"  pandas.read_csv (default float parser):  {t['baseline'].time_text()}")
+        print(f"  pandas.read_csv (round_trip floats):     {t['round_trip'].time_text()}")
+        print(f"  hybridwsi read_csv (validated history):  {t['ours'].time_text()}")
+        print(f"  ratio ours / pandas default: {t['ours'].ratio_text()} (target <= 2); "
+              f"ours / pandas round_trip: "
+              f"{t['ours'].median / t['round_trip'].median:.2f} (medians)")
         ref = exact.to_numpy()
         ours = np.column_stack([ds["time"].values, ds["z"].values[:, 0]])
         ulp = np.abs(fast.to_numpy() - ref) / np.spacing(np.abs(ref))
@@ -96,11 +97,17 @@ def main() -> None:
         print(f"wide CSV: {args.columns} columns, {wide_csv.stat().st_size / 1e6:.0f} MB")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            ds, t_wide = timed(lambda: read_csv(wide_csv, forces=["F_tot"]))
-        print(f"  hybridwsi read_csv --force-column F_tot: {t_wide:7.2f} s "
+            ds = read_csv(wide_csv, forces=["F_tot"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the note above, once per read
+            t = compare(Figure(lambda: pd.read_csv(wide_csv, engine="c")),
+                        {"ours": Figure(lambda: read_csv(wide_csv, forces=["F_tot"]))},
+                        repeat=args.repeat, warmup=False)
+        print(f"  hybridwsi read_csv --force-column F_tot: {t['ours'].time_text()} "
               f"({len(ds.data_vars)} variables; {caught[0].message if caught else 'no note'})")
-        _, t_wide_pd = timed(lambda: pd.read_csv(wide_csv, engine="c"))
-        print(f"  pandas.read_csv (all columns):           {t_wide_pd:7.2f} s")
+        print(f"  pandas.read_csv (all columns):           {t['baseline'].time_text()}; "
+              f"ours / pandas {t['ours'].ratio_text()}")
+    print(conditions(repeat=args.repeat))
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of the process: {peak:.0f} MB")
 

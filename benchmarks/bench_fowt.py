@@ -12,14 +12,17 @@ the timing; the ratio with the fit inside is printed too.
 In the same process: the same run with the mooring as its linearised stiffness only and no
 drag (still the stepping solver, since the stiffness is passed as a force component), and the
 nonlinear run again on the NumPy loop (``solvers.COMPILED = False``; ``--no-numpy`` skips it)
-with the largest difference between the two paths. Best of ``--repeat``.
+with the largest difference between the two paths. Timing: ``benchmarks/timing.py``
+(samples of >= 0.2 s, ``--repeat`` rounds alternating baseline and candidates, medians).
 Run: ``python benchmarks/bench_fowt.py [--duration 3600] [--dt 0.1]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -31,21 +34,26 @@ from hybridwsi.casemodel import linear_components
 from hybridwsi.report.fowt import DOFS, oc3_coefficients
 from hybridwsi.waves import JONSWAP
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions, sample  # noqa: E402
 
-def _best_wall(run, repeat: int) -> tuple[float, object]:
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = run()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+
+def _numpy_loop(run):
+    """``run`` on the NumPy stepping loop (``solvers.COMPILED = False``)."""
+    def numpy_run():
+        solvers.COMPILED = False
+        try:
+            return run()
+        finally:
+            solvers.COMPILED = True
+    return numpy_run
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=3600.0, help="simulated time [s]")
     parser.add_argument("--dt", type=float, default=0.1, help="time step [s]")
-    parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-loop run")
     args = parser.parse_args(argv)
 
@@ -55,9 +63,8 @@ def main(argv: list[str] | None = None) -> None:
     mooring = MooringForce.from_case(case, list(DOFS))
     linear = linear_components(case, DOFS, stiffness=mooring.table.stiffness())  # [−K z, B_add]
     drag = MorisonDrag.from_case(case, list(DOFS), wave=wave, ramp=60.0)
-    t0 = time.perf_counter()
     ss = build_system(coeffs, dofs=DOFS, dt=args.dt).ss
-    t_fit = time.perf_counter() - t0
+    t_fit = sample(lambda: build_system(coeffs, dofs=DOFS, dt=args.dt))
     kw = dict(dofs=DOFS, duration=args.duration, dt=args.dt, wave=wave, ramp=60.0,
               radiation_ss=ss)
 
@@ -73,17 +80,21 @@ def main(argv: list[str] | None = None) -> None:
     print(f"loop: {'Numba (compiled)' if HAVE_NUMBA and solvers.COMPILED else 'NumPy'}; "
           f"radiation fit (order {ss.order}) {t_fit:.2f} s, warm-up (compile or cache load) "
           f"{t_warm:.2f} s, both once per process")
-    wall_nl, hist_nl = _best_wall(nonlinear, args.repeat)
-    wall_lin, hist_lin = _best_wall(baseline, args.repeat)
-    runs = [("nonlinear mooring + Morison drag", wall_nl, hist_nl),
-            ("baseline: linear mooring only", wall_lin, hist_lin)]
+    last = {}  # the last history of each run, for the statistics below
+
+    def keep(name, run):
+        return Figure(lambda: last.__setitem__(name, run()), args.duration)
+    cands = {"nonlinear mooring + Morison drag": keep("nl", nonlinear)}
     if not args.no_numpy:
-        solvers.COMPILED = False
-        try:
-            wall_np, hist_np = _best_wall(nonlinear, args.repeat)
-        finally:
-            solvers.COMPILED = True
-        runs.append(("nonlinear, NumPy loop", wall_np, hist_np))
+        cands["nonlinear, NumPy loop"] = keep("np", _numpy_loop(nonlinear))
+    t = compare(keep("lin", baseline), cands, repeat=args.repeat, warmup=False,
+                baseline_label="baseline: linear mooring only")
+    wall_nl, wall_lin = (t[k].median * args.duration for k in (
+        "nonlinear mooring + Morison drag", "baseline: linear mooring only"))
+    hist_nl, hist_lin = last["nl"], last["lin"]
+    runs = [(name, t[name].median * args.duration, last[key]) for name, key in (
+        ("nonlinear mooring + Morison drag", "nl"), ("baseline: linear mooring only", "lin"),
+        ("nonlinear, NumPy loop", "np")) if name in t]
     for name, wall, hist in runs:
         z = hist["z"].values
         print(f"{name:34s} {args.duration:.0f} s simulated in {wall:7.2f} s wall: "
@@ -95,12 +106,17 @@ def main(argv: list[str] | None = None) -> None:
     print("largest difference nonlinear - linear: " + ", ".join(
         f"{d} {v:.4g} {'rad' if d == 'Pitch' else 'm'}" for d, v in zip(DOFS, diff)))
     if not args.no_numpy:
+        hist_np = last["np"]
         rel = max(np.abs(hist_nl[v].values - hist_np[v].values).max()
                   / np.abs(hist_np[v].values).max() for v in ("z", "zdot", "F_tot"))
-        print(f"Numba vs NumPy loop: {wall_np / wall_nl:.1f}x faster, largest difference "
-              f"{rel:.1e} of each variable's range (z, zdot, F_tot)")
-    print(f"cost of the nonlinear forces: {wall_nl / wall_lin:.2f}x the linear baseline "
+        wall_np = t["nonlinear, NumPy loop"].median * args.duration
+        print(f"Numba vs NumPy loop: {wall_np / wall_nl:.1f}x "
+              f"faster (medians), largest difference {rel:.1e} of each variable's range "
+              f"(z, zdot, F_tot)")
+    print(f"cost of the nonlinear forces: "
+          f"{t['nonlinear mooring + Morison drag'].ratio_text()} the linear baseline "
           f"(steps {int(args.duration / args.dt)}, dt {args.dt} s)")
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

@@ -6,9 +6,9 @@ JONSWAP sea (Hs 4 m, Tp 11 s, 200 components) at 30°, long-crested and spread (
 baseline, in the same process, is the previous implementation: θ_ij = ω_j t + φ_ij on the
 (points × components) grid, then Σ P cos θ, Σ Q sin θ and their ω-weighted sums (n × n_comp
 cosines and sines per call); the candidate evaluates n_comp exponentials and one (3n × n_comp)
-complex product. Samples of >= 0.2 s, baseline and candidate alternated, ``--repeat`` pairs
-(>= 5); prints the median ratio baseline/candidate with its spread (min–max of the per-pair
-ratios) and the largest difference. Also one ``MemberMorison.generalised_force`` call, where
+complex product. Timing: ``benchmarks/timing.py`` (samples of >= 0.2 s, baseline and
+candidate alternated, ``--repeat`` rounds); prints the median ratio baseline/candidate with its
+spread (min–max of the per-round ratios) and the largest difference. Also one ``MemberMorison.generalised_force`` call, where
 the kinematics are most of the cost. Run: ``python benchmarks/bench_member_kinematics.py``.
 """
 
@@ -16,13 +16,17 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from hybridwsi.cases import load_case
 from hybridwsi.forces import MemberMorison
 from hybridwsi.waves import JONSWAP, AiryPoints, ramp_factor
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 
 def trig_sums(kin: AiryPoints, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -37,33 +41,19 @@ def trig_sums(kin: AiryPoints, t: float) -> tuple[np.ndarray, np.ndarray]:
             np.column_stack([ps @ kin.direction, aw]) * f)
 
 
-def _sample(fn, times: np.ndarray, min_time: float = 0.2) -> float:
-    """Seconds per call over at least ``min_time`` s."""
-    calls, start = 0, time.perf_counter()
-    while True:
-        for t in times:
-            fn(t)
-        calls += times.size
-        elapsed = time.perf_counter() - start
-        if elapsed >= min_time:
-            return elapsed / calls
-
-
-def compare(label: str, base, cand, times: np.ndarray, repeat: int) -> None:
-    ratios, tb, tc = [], [], []
-    for _ in range(repeat):
-        b, c = _sample(base, times), _sample(cand, times)
-        tb.append(b)
-        tc.append(c)
-        ratios.append(b / c)
-    print(f"{label}: baseline {np.median(tb) * 1e6:8.1f} us/call, candidate "
-          f"{np.median(tc) * 1e6:8.1f} us/call, ratio median {np.median(ratios):.2f}x "
-          f"(min {min(ratios):.2f}, max {max(ratios):.2f}, {repeat} pairs)")
+def compare_calls(label: str, base, cand, times: np.ndarray, repeat: int) -> None:
+    """Time ``base(t)`` and ``cand(t)`` over ``times`` (harness of ``benchmarks/timing.py``)."""
+    res = compare(Figure(lambda: [base(t) for t in times], times.size),
+                  {"candidate": Figure(lambda: [cand(t) for t in times], times.size)},
+                  repeat=repeat)
+    print(f"{label}: baseline {res['baseline'].median * 1e6:8.1f} us/call, candidate "
+          f"{res['candidate'].median * 1e6:8.1f} us/call, speed-up "
+          f"{res['candidate'].ratio_text(speedup=True)}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--repeat", type=int, default=REPEAT + 2, help="alternating rounds")
     args = parser.parse_args()
     case = load_case("oc4_semi")
     times = np.linspace(0.0, 100.0, 37)
@@ -78,7 +68,7 @@ def main() -> None:
         name = "long-crested" if spread is None else f"spread s={spread:g}"
         print(f"{name}: {kin.phase.shape[0]} points x {kin.omega.size} components, largest "
               f"difference {diff:.2e} m/s or m/s^2")
-        compare(f"  kinematics ({name})", lambda t: trig_sums(kin, t),
+        compare_calls(f"  kinematics ({name})", lambda t: trig_sums(kin, t),
                 lambda t: kin.velocity_acceleration(t), times, args.repeat)
         zdot = np.full(6, 0.01)
         cand = lambda t: drag.generalised_force(t, zdot)  # noqa: E731
@@ -91,7 +81,9 @@ def main() -> None:
             finally:
                 kin.velocity_acceleration = saved
 
-        compare(f"  MemberMorison.generalised_force ({name})", base, cand, times, args.repeat)
+        compare_calls(f"  MemberMorison.generalised_force ({name})", base, cand, times,
+                      args.repeat)
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

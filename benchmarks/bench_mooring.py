@@ -12,7 +12,8 @@ its three catenary lines) per state:
   (the interpolant replaces MoorPy inside the ODE, where consecutive states are close); the
   random-state one is what a single isolated evaluation costs.
 
-Best of ``--repeat`` runs each, so a loaded machine slows both sides alike. Also prints the
+Timing: ``benchmarks/timing.py`` (samples of >= 0.2 s, ``--repeat`` rounds alternating the
+baseline and the candidates, medians and the speed-up's spread). Also prints the
 largest interpolation error on the benchmark states, relative to each DOF's force scale.
 Run: ``python benchmarks/bench_mooring.py`` (needs ``hybridwsi[mooring]``).
 
@@ -23,7 +24,7 @@ timing): the candidate couples :class:`~hybridwsi.forces.MoorDynForce` (the ship
 MoorDyn sub-stepping at its dtM; its static initialisation at the start of every run is
 inside the timing), the baseline is the same run with the tabulated quasi-static mooring
 (:class:`~hybridwsi.forces.MooringForce`, compiled RK4 loop). Alternating baseline/candidate
-``--repeat`` times (≥ 5); a baseline sample repeats its run until it lasts ≥ 0.2 s. Prints the
+``--repeat`` times (≥ 5); a sample repeats its run until it lasts ≥ 0.2 s. Prints the
 MoorDyn-coupled wall time per simulated hour against real time (3600 s) and the median ratio to
 the baseline with its spread. ``--duration`` [s] simulated per sample (default 600; 3600 for a
 literal hour).
@@ -50,7 +51,10 @@ reference of the same sample.
 from __future__ import annotations
 
 import argparse
+import itertools
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -58,57 +62,32 @@ from hybridwsi.cases import load_case
 from hybridwsi.forces._compiled import HAVE_NUMBA
 from hybridwsi.forces.mooring import MooringSystem
 
-
-def _best_per_call(fn, calls: int, repeat: int) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / calls)
-    return best
-
-
-def _timed(run, min_time: float = 0.2) -> tuple[float, object]:
-    """Wall time of one call of ``run``, repeated until the sample lasts ``min_time`` [s]."""
-    n, t0 = 0, time.perf_counter()
-    while True:
-        out = run()
-        n += 1
-        wall = time.perf_counter() - t0
-        if wall >= min_time:
-            return wall / n, out
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 
 def _compare(run_base, run_md, duration: float, repeat: int, what: str) -> None:
-    """Alternate the baseline (repeated to ≥ 0.2 s) and the MoorDyn-coupled run ``repeat``
-    times; print wall and CPU time per simulated hour, real-time factor and median ratio."""
-    ratios, walls, base, cpu = [], [], [], []
-    for _ in range(repeat):
-        t_base, h_base = _timed(run_base)
-        t0, c0 = time.perf_counter(), time.process_time()
-        h_md = run_md()
-        t_md = time.perf_counter() - t0
-        cpu.append(time.process_time() - c0)
-        ratios.append(t_md / t_base)
-        walls.append(t_md)
-        base.append(t_base)
-    hour = 3600.0 / duration * np.median(walls)
+    """The tabulated baseline and the MoorDyn-coupled run in ``repeat`` alternating rounds
+    (``benchmarks/timing.py``); print wall time per simulated hour, real-time factor and the
+    median ratio with its spread."""
+    last = {}
+    t = compare(Figure(lambda: last.update(base=run_base())),
+                {"moordyn": Figure(lambda: last.update(md=run_md()))}, repeat=repeat,
+                warmup=False, baseline_label="table")
+    md, base = t["moordyn"], t["table"]
+    hour = 3600.0 / duration * md.median
     print(f"{duration:.0f} s simulated per sample, 6 DOF, {repeat} alternating samples; {what}")
-    print(f"MoorDyn-coupled   : median {np.median(walls):7.2f} s wall (min {min(walls):.2f}, max "
-          f"{max(walls):.2f}) -> {hour:6.0f} s per simulated hour = {3600.0 / hour:5.1f}x "
-          f"faster than real time")
-    print(f"  its CPU time    : median {np.median(cpu):7.2f} s -> "
-          f"{3600.0 / duration * np.median(cpu):6.0f} s CPU per simulated hour (the wall time "
-          f"on a machine shared with other jobs is longer)")
-    print(f"tabulated baseline: median {np.median(base):7.3f} s wall (min {min(base):.3f}, max "
-          f"{max(base):.3f}) -> {3600.0 / duration * np.median(base):6.1f} s per hour")
-    print(f"ratio MoorDyn / table: median {np.median(ratios):.0f}x (min {min(ratios):.0f}, max "
-          f"{max(ratios):.0f})")
-    z_md, z_tab = h_md["z"].values, h_base["z"].values
+    print(f"MoorDyn-coupled   : {md.time_text()} wall per run -> {hour:6.0f} s per simulated "
+          f"hour = {3600.0 / hour:5.1f}x faster than real time (wall time: longer on a "
+          f"machine shared with other jobs)")
+    print(f"tabulated baseline: {base.time_text()} wall per run -> "
+          f"{3600.0 / duration * base.median:6.1f} s per hour")
+    print(f"ratio MoorDyn / table: {md.ratio_text()}")
+    z_md, z_tab = last["md"]["z"].values, last["base"]["z"].values
     print("std surge/heave/pitch MoorDyn: "
           + ", ".join(f"{z_md[:, i].std():.4g}" for i in (0, 2, 4))
           + "; table: " + ", ".join(f"{z_tab[:, i].std():.4g}" for i in (0, 2, 4)))
+    print(conditions(repeat=repeat))
 
 
 def moordyn_cost(duration: float, repeat: int) -> None:
@@ -174,26 +153,22 @@ def hybrid_cost(duration: float, repeat: int) -> None:
         return fmh.run_hybrid(nets[k], case, model, k,
                               corrections=shipped[k]["corrections"])[0]
 
-    for k in nets:
-        run_hybrid(k)  # warm-up (Numba kernels, torch)
-    walls: dict[str, list[float]] = {"moordyn": [], **{k: [] for k in nets}}
-    out = {}
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out["moordyn"] = fmh.simulate("moordyn", sea, duration)
-        walls["moordyn"].append(time.perf_counter() - t0)
-        for k in nets:
-            t0 = time.perf_counter()
-            out[k] = run_hybrid(k)
-            walls[k].append(time.perf_counter() - t0)
-    print(f"{duration:.0f} s simulated, sea {name} {sea}, {', '.join(fmh.DOFS)}, dt {fmh.DT} s, "
-          f"{repeat} alternating samples (MoorDyn, then each hybrid)")
-    for k, v in walls.items():
-        print(f"{k:10s}: median {np.median(v):8.3f} s wall (min {min(v):.3f}, max "
-              f"{max(v):.3f}) = {duration / np.median(v):8.1f}x real time")
+    out: dict[str, object] = {}
+
+    def keep(label: str, fn):
+        return Figure(lambda: out.__setitem__(label, fn()), duration)  # per simulated second
+
+    # MoorDyn first in every round, then each hybrid (timing.compare alternates them)
+    timings = compare(keep("moordyn", lambda: fmh.simulate("moordyn", sea, duration)),
+                {k: keep(k, lambda k=k: run_hybrid(k)) for k in nets}, repeat=repeat,
+                min_time=0.0, baseline_label="moordyn")
+    print(f"{duration:.0f} s simulated, sea {name} {sea}, {', '.join(fmh.DOFS)}, dt {fmh.DT} s "
+          "(MoorDyn, then each hybrid)")
+    for k, v in timings.items():
+        print(f"{k:10s}: {v.time_text(duration)} wall = {1.0 / v.median:8.1f}x real time")
     ref = out["moordyn"]
     for k in nets:
-        ratios = np.array(walls["moordyn"]) / np.array(walls[k])
+        ratios = 1.0 / timings[k].ratios
         t = out[k]["time"].values
         err = {d: float(np.sqrt(np.mean((out[k]["z"].sel(dof=d).values - ref["z"].sel(dof=d).sel(
             time=t, method="nearest").values) ** 2) / np.mean(ref["z"].sel(dof=d).values ** 2)))
@@ -206,8 +181,7 @@ def hybrid_cost(duration: float, repeat: int) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--calls", type=int, default=2000, help="interpolant calls per run")
-    parser.add_argument("--repeat", type=int, default=5, help="best of this many runs")
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     parser.add_argument("--batch", type=int, default=32, help="states per batch call")
     parser.add_argument("--moordyn", action="store_true",
                         help="time the MoorDyn-coupled loop against the tabulated mooring")
@@ -224,7 +198,7 @@ def main() -> None:
         hybrid_cost(args.duration, max(args.repeat, 3))
         return
     if args.moordyn or args.design:
-        (design_cost if args.design else moordyn_cost)(args.duration, max(args.repeat, 5))
+        (design_cost if args.design else moordyn_cost)(args.duration, args.repeat)
         return
 
     case = load_case("oc3_hywind")
@@ -232,21 +206,24 @@ def main() -> None:
     import hybridwsi.forces._compiled  # noqa: F401  loads (or compiles) the kernels untimed
     t0 = time.perf_counter()
     table = system.tabulate()
-    t_build = time.perf_counter() - t0
+    t_build = time.perf_counter() - t0  # once: the table is built once per case
     half = np.array(list(table.ranges.values()))
     states = np.random.default_rng(0).uniform(-1.0, 1.0, (args.batch, 6)) * half
     # a time-loop trajectory: half the box, periods 20-125 s, 0.1 s steps (MoorPy warm-starts
     # each catenary from the previous solve, its fastest use)
     t = np.arange(20_000)[:, None] * 0.1
     path = 0.5 * half * np.sin(2 * np.pi * t / np.array([125, 110, 31, 29, 29, 8.3]) + 0.3)
-    cycle, walk = iter(np.tile(states, (10_000, 1))), iter(path)
+    cycle, walk = itertools.cycle(states), itertools.cycle(path)
 
-    t_random = _best_per_call(lambda: system.force6(next(cycle)), 64, args.repeat)
-    t_moorpy = _best_per_call(lambda: system.force6(next(walk)), 200, args.repeat)
-    t_single = _best_per_call(lambda: table.force6(next(cycle)), args.calls, args.repeat)
-    t_batch = _best_per_call(lambda: table.force6(states), args.calls // 10, args.repeat)
-    t_numpy = _best_per_call(lambda: table._force6_scalar(next(cycle)), args.calls // 4,
-                             args.repeat)
+    t = compare(Figure(lambda: system.force6(next(walk))),
+                {"random": Figure(lambda: system.force6(next(cycle))),
+                 "single": Figure(lambda: table.force6(next(cycle))),
+                 "batch": Figure(lambda: table.force6(states), args.batch),
+                 "numpy": Figure(lambda: table._force6_scalar(next(cycle)))},
+                repeat=args.repeat, baseline_label="moorpy")
+    t_random, t_moorpy, t_single, t_numpy = (t[k].median for k in ("random", "moorpy",
+                                                                    "single", "numpy"))
+    t_batch = t["batch"].median * args.batch
     exact = np.array([system.force6(q) for q in states])
     scale = np.abs(exact - system.preload()).max(axis=0)
     error = np.abs(table.force6(states) - exact).max(axis=0) / scale
@@ -257,7 +234,8 @@ def main() -> None:
     print(f"MoorPy solve, random states  : {t_random * 1e6:9.1f} us   (interpolant single: "
           f"ratio {t_random / t_single:.0f}x)")
     print(f"MoorPy solve along a path    : {t_moorpy * 1e6:9.1f} us   (baseline below)")
-    print(f"interpolant, single state    : {t_single * 1e6:9.1f} us   ratio {t_moorpy / t_single:6.0f}x")
+    print(f"interpolant, single state    : {t_single * 1e6:9.1f} us   ratio "
+          f"{t['single'].ratio_text(speedup=True)}")
     print(f"interpolant, batch of {args.batch:<3d}    : {t_batch * 1e6:9.1f} us   "
           f"{t_batch / args.batch * 1e6:.1f} us/state, ratio {args.batch * t_moorpy / t_batch:6.0f}x")
     print(f"interpolant, single, NumPy   : {t_numpy * 1e6:9.1f} us   ratio {t_moorpy / t_numpy:6.0f}x "
@@ -265,6 +243,7 @@ def main() -> None:
     print(f"target >= 100x               : single {'met' if t_moorpy / t_single >= 100 else 'NOT met'}, "
           f"batch {'met' if args.batch * t_moorpy / t_batch >= 100 else 'NOT met'}")
     print("max error / force scale per DOF: " + ", ".join(f"{e:.1e}" for e in error))
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

@@ -7,17 +7,19 @@ velocity of a JONSWAP sea (100 components, 30° off the x axis). The baseline, m
 same process, is the same formula written as a Python loop over strips (and wave components,
 their cosines computed once per state), one state at a time, as one would write it without
 NumPy. The Numba kernel the compiled RK4 loop calls (``MorisonDrag.compiled_force``) is timed
-on single states too (called from Python, so the call overhead is included). Best of
-``--repeat`` runs each, so a
-loaded machine slows both sides alike; also prints the largest difference between the two.
+on single states too (called from Python, so the call overhead is included). Timing:
+``benchmarks/timing.py`` (samples of >= 0.2 s, ``--repeat`` rounds alternating baseline and
+candidates, median speed-up with its spread); also prints the largest difference.
 Run: ``python benchmarks/bench_morison.py``.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
-import timeit
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -25,9 +27,8 @@ from hybridwsi.cases import load_case
 from hybridwsi.forces.morison import MorisonDrag
 from hybridwsi.waves import JONSWAP
 
-
-def _best_per_call(fn, calls: int, repeat: int) -> float:
-    return min(timeit.repeat(fn, number=calls, repeat=repeat)) / calls
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 
 def loop_baseline(drag: MorisonDrag):
@@ -60,40 +61,38 @@ def loop_baseline(drag: MorisonDrag):
     return force
 
 
-def run(label: str, drag: MorisonDrag, states: np.ndarray, calls: int, repeat: int) -> None:
+def run(label: str, drag: MorisonDrag, states: np.ndarray, repeat: int) -> None:
     base = loop_baseline(drag)
     rows = [s.tolist() for s in states]
-    it = iter(np.tile(np.arange(len(rows)), 100_000))
-    t_loop = _best_per_call(lambda: base(1.7, rows[next(it)]), max(calls // 50, 20), repeat)
-    t_single = _best_per_call(lambda: drag.ode_force(1.7, None, states[next(it)], None),
-                              calls, repeat)
-    t_batch = _best_per_call(lambda: drag.ode_force(1.7, None, states, None), calls // 10, repeat)
+    it = itertools.cycle(range(len(rows)))
+    n = len(rows)
+    figures = {
+        "vectorised, single state": Figure(lambda: drag.ode_force(1.7, None, states[next(it)],
+                                                                  None)),
+        f"vectorised, batch of {n}, per state": Figure(
+            lambda: drag.ode_force(1.7, None, states, None), n)}
     kern = drag.compiled_force(states.shape[1])  # None without Numba
     if kern is not None:
         out, zero = np.empty(states.shape[1]), np.zeros(states.shape[1])
-        times = iter(1.7 + 0.05 * np.arange(10_000_000))  # distinct t: no cached wave speed
-        t_kernel = _best_per_call(lambda: kern.kernel(next(times), zero, states[next(it)], out,
-                                                      kern.fdata, kern.idata), calls, repeat)
+        times = itertools.count(1.7, 0.05)  # distinct t: no cached wave speed
+        figures["Numba kernel (compiled loop), single"] = Figure(
+            lambda: kern.kernel(next(times), zero, states[next(it)], out, kern.fdata,
+                                kern.idata))
+    res = compare(Figure(lambda: base(1.7, rows[next(it)])), figures, repeat=repeat,
+                  baseline_label="Python loop over strips, per state")
     ref = np.array([base(1.7, r) for r in rows])
     got = drag.ode_force(1.7, None, states, None)
     err = np.abs(got - ref).max() / np.abs(ref).max()
-    n = len(rows)
     print(f"{label}")
-    print(f"  Python loop over strips, per state : {t_loop * 1e6:9.1f} us   (baseline)")
-    print(f"  vectorised, single state           : {t_single * 1e6:9.1f} us   "
-          f"ratio {t_loop / t_single:6.1f}x")
-    print(f"  vectorised, batch of {n:<3d}           : {t_batch * 1e6:9.1f} us   "
-          f"{t_batch / n * 1e6:.2f} us/state, ratio {n * t_loop / t_batch:6.1f}x")
-    if kern is not None:
-        print(f"  Numba kernel (compiled loop), single: {t_kernel * 1e6:9.1f} us   "
-              f"ratio {t_loop / t_kernel:6.1f}x")
-    print(f"  max |difference| / max |force|     : {err:.1e}")
+    for name, t in res.items():
+        ratio = "(baseline)" if t.ratios is None else f"speed-up {t.ratio_text(speedup=True)}"
+        print(f"  {name:38s}: {t.median * 1e6:9.2f} us   {ratio}")
+    print(f"  max |difference| / max |force|        : {err:.1e}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--calls", type=int, default=4000, help="vectorised calls per run")
-    parser.add_argument("--repeat", type=int, default=5, help="best of this many runs")
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     parser.add_argument("--batch", type=int, default=32, help="states per batch call")
     args = parser.parse_args()
 
@@ -102,13 +101,13 @@ def main() -> None:
     still = MorisonDrag.from_case(case)  # Surge, Heave, Pitch; no wave kinematics
     print(f"{still.describe()}")
     scale3 = np.array([1.0, 0.5, 0.02])  # m/s, m/s, rad/s
-    run("3 DOF, still water", still, rng.normal(size=(args.batch, 3)) * scale3, args.calls,
-        args.repeat)
+    run("3 DOF, still water", still, rng.normal(size=(args.batch, 3)) * scale3, args.repeat)
     sea = JONSWAP(hs=6.0, tp=12.0, gamma=3.3, seed=1, n_components=100, direction=math.pi / 6)
     waves = MorisonDrag.from_case(case, case["dofs"], wave=sea)
     scale6 = np.array([1.0, 1.0, 0.5, 0.02, 0.02, 0.05])
     run("6 DOF, JONSWAP wave kinematics (100 components)", waves,
-        rng.normal(size=(args.batch, 6)) * scale6, args.calls, args.repeat)
+        rng.normal(size=(args.batch, 6)) * scale6, args.repeat)
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

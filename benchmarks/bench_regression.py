@@ -2,18 +2,23 @@
 
 Prints the time of :func:`hybridwsi.diagnostic.regress` (SVD fit, HAC covariance, spectrum of
 z) and its ratio to a baseline measured in the same process: a plain ``numpy.linalg.lstsq`` fit
-of ``[1, z̈, ż, z]`` without any uncertainty. Run: ``python benchmarks/bench_regression.py``.
+of ``[1, z̈, ż, z]`` without any uncertainty. Timing: ``benchmarks/timing.py`` (samples of >= 0.2 s, 5 alternating
+rounds, median ratio with its spread). Run: ``python benchmarks/bench_regression.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from hybridwsi.diagnostic import regress
 from hybridwsi.history import make_history
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 
 def _data(n: int, seed: int = 0):
@@ -27,19 +32,10 @@ def _data(n: int, seed: int = 0):
     return make_history(t, z, zd, zdd, forces={"F_tot": f}), (t, z, zd, zdd, f)
 
 
-def _best_of(fn, repeat: int) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=1_000_000, help="number of samples")
-    parser.add_argument("--repeat", type=int, default=3, help="best of this many runs")
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     args = parser.parse_args()
     hist, (_, z, zd, zdd, f) = _data(args.n)
 
@@ -48,15 +44,17 @@ def main() -> None:
         np.linalg.lstsq(x, f, rcond=None)
 
     res = regress(hist)
-    t_base = _best_of(baseline, args.repeat)
-    t_reg = _best_of(lambda: regress(hist), args.repeat)
+    t = compare(Figure(baseline), {"regress": Figure(lambda: regress(hist))},
+                repeat=args.repeat)
+    t_reg = t["regress"].median
     print(f"samples                      : {args.n}")
-    print(f"baseline numpy lstsq (no SE) : {t_base:.3f} s")
-    print(f"regress with HAC (lag {res.hac_lags:>3d})   : {t_reg:.3f} s")
-    print(f"ratio regress / baseline     : {t_reg / t_base:.1f}")
-    print(f"target < 1 s                 : {'met' if t_reg < 1.0 else 'NOT met'}")
+    print(f"baseline numpy lstsq (no SE) : {t['baseline'].time_text(1.0, 's')}")
+    print(f"regress with HAC (lag {res.hac_lags:>3d})   : {t['regress'].time_text(1.0, 's')}")
+    print(f"ratio regress / baseline     : {t['regress'].ratio_text()}")
+    print(f"target < 1 s                 : {'met' if t_reg < 1.0 else 'NOT met'} (median)")
     print(f"alpha, beta, gamma = {res.alpha[0, 0]:.4f}, {res.beta[0, 0]:.4f}, "
           f"{res.gamma[0, 0]:.3f} (truth 10.56, 0.3, 692.2)")
+    print(conditions(repeat=args.repeat))
 
 
 if __name__ == "__main__":

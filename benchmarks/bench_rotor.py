@@ -7,9 +7,10 @@ timing), NREL 5-MW rotor in turbulent wind (8 m/s, TI 0.1, Kaimal, rotor-average
 quasi-steady rotor leaves the pitch mode negatively damped and the hour does not finish). The
 baseline, in the same process, is the run with the parked rotor (compiled RK4 loop); the
 candidates are the quasi-steady rotor (its Numba kernel: the compiled loop) and the PI-controlled
-rotor (three internal states: the NumPy loop). Samples alternate baseline / candidates,
-``--repeat`` (>= 5) of each; prints per run the median wall time, the median ratio to the
-baseline and its spread (min-max of the per-repeat ratios), and the real-time factor.
+rotor (three internal states: the NumPy loop). Timing: ``benchmarks/timing.py`` (samples of
+>= 0.2 s, ``--repeat`` >= 5 rounds alternating baseline / candidates); prints per run the
+median wall time, the median ratio to the baseline and its spread (min-max of the per-round
+ratios), and the real-time factor.
 Run: ``python benchmarks/bench_rotor.py``.
 """
 
@@ -17,7 +18,8 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -28,6 +30,9 @@ from hybridwsi.dofs import index
 from hybridwsi.forces import Hydrostatic, additional_damping, rotor_from_case
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.report.fowt import oc3_coefficients
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 DOFS = ["Surge", "Heave", "Pitch"]
 
@@ -57,23 +62,18 @@ def main(argv: list[str] | None = None) -> int:
             "quasi-steady": runner(case, coeffs, ss, {**wind, "controller": "quasi-steady"},
                                    args.duration),
             "pi": runner(case, coeffs, ss, {**wind, "controller": "pi"}, args.duration)}
-    for fn in runs.values():  # compile the kernels, warm the caches
-        fn()
-    times: dict[str, list[float]] = {name: [] for name in runs}
-    for _ in range(max(args.repeat, 5)):
-        for name, fn in runs.items():  # alternate baseline and candidates
-            t0 = time.perf_counter()
-            fn()
-            times[name].append(time.perf_counter() - t0)
-    base = np.array(times["parked"])
-    print(f"{args.duration:g} s simulated, dt 0.1 s, {len(base)} repeats each")
-    for name, t in times.items():
-        t = np.array(t)
-        ratio = t / base
-        print(f"{name:13s} median {np.median(t):7.3f} s ({args.duration / np.median(t):8.0f}x "
-              f"real time), / parked: median {np.median(ratio):6.2f} "
-              f"(spread {ratio.min():.2f}-{ratio.max():.2f})")
-    return 0 if math.isfinite(float(np.median(base))) else 1
+    parked = runs.pop("parked")
+    res = compare(Figure(parked, args.duration), {k: Figure(f, args.duration)
+                                                  for k, f in runs.items()},
+                  repeat=max(args.repeat, REPEAT), baseline_label="parked")
+    print(f"{args.duration:g} s simulated, dt 0.1 s (times per simulated second)")
+    for name, t in res.items():
+        ratio = "" if t.ratios is None else f", / parked: {t.ratio_text()}"
+        print(f"{name:13s} median {t.median * args.duration:7.3f} s per run "
+              f"({1 / t.median:8.0f}x real time){ratio}")
+    print(conditions(repeat=max(args.repeat, REPEAT)))
+    base = res["parked"].median
+    return 0 if math.isfinite(base) else 1
 
 
 if __name__ == "__main__":

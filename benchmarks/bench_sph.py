@@ -2,12 +2,13 @@
 
 Both are measured in this process on the same particle positions (our case's fluid and wall
 particles), with OpenMP on ``OMP_NUM_THREADS`` threads (default 2). The ratio ours/stock is
-what to compare between machines; absolute rates depend on the load, so each rate is the best
-of ``--repeat`` timed blocks (the median is printed too) and the 1-min load average is printed.
+what to compare between machines; absolute rates depend on the load. Timing:
+``benchmarks/timing.py`` (samples of >= 0.2 s of whole steps, ``--repeat`` rounds alternating
+stock and ours, median rates and the ratio's spread; the load average is printed).
 OpenMP threads sleep at barriers (``OMP_WAIT_POLICY=passive``, set by ``hybridwsi.sph.run``
 unless given): spinning threads made the 2-thread rate 2-7x lower whenever another job held a core.
 
-    OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--steps2d 100] [--steps3d 10] [--repeat 3]
+    OMP_NUM_THREADS=2 python benchmarks/bench_sph.py [--skip3d] [--repeat 5]
 
 The first run compiles 4 kernel sets (about a minute each); later runs use PySPH's cache.
 Measured rates before and after the engine-speed work (issue 15 item 9): docs/SPH_RUNS.md,
@@ -17,10 +18,14 @@ section "Engine speed".
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
-import time
+import sys
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "2")
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
 
 #: recorded before/after of the engine-speed work, 2D case, particle-updates/s, best of 5 x 40
 #: steps, load average 2.8-3.0 (docs/SPH_RUNS.md, "Engine speed")
@@ -28,30 +33,23 @@ RECORDED = ("recorded 2D (main 2012cb3 -> now, load 2.8-3.0): 1 thread 9.1-9.4e5
             "2 threads spinning median 1.7-1.8e5, passive 9.0-9.4e5 -> 0.99-1.02e6")
 
 
-def _time_steps(solver, n_particles: int, steps: int, dt: float, repeat: int
-                ) -> tuple[float, float]:
-    """(best, median) particle-updates/s over ``repeat`` blocks of ``steps`` steps."""
+def _stepper(solver, n_particles: int, dt: float) -> Figure:
+    """One integrator step per call (after a warm-up step: the first neighbour build), per
+    particle update."""
     integ = solver.integrator
     integ.initial_acceleration(0.0, dt)
-    integ.step(0.0, dt)  # warm-up (first neighbour build)
-    rates, k = [], 1
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            integ.step(k * dt, dt)
-            k += 1
-        rates.append(n_particles * steps / (time.perf_counter() - t0))
-    return max(rates), float(sorted(rates)[len(rates) // 2])
+    integ.step(0.0, dt)
+    k = itertools.count(1)
+    return Figure(lambda: integ.step(next(k) * dt, dt), n_particles)
 
 
-def ours(case, steps: int, repeat: int = 1) -> tuple[float, float]:
+def ours(case) -> Figure:
     from hybridwsi.sph.run import make_solver
 
-    return _time_steps(make_solver(case, openmp=True), case.n_particles, steps, case.dt,
-                       repeat)
+    return _stepper(make_solver(case, openmp=True), case.n_particles, case.dt)
 
 
-def stock(case, steps: int, repeat: int = 1) -> tuple[float, float]:
+def stock(case) -> Figure:
     """PySPH's WCSPHScheme (dynamic boundary, Tait, Monaghan AV, XSPH) on the same points."""
     from compyle.config import get_config
     from pysph.base.kernels import WendlandQuintic
@@ -79,40 +77,38 @@ def stock(case, steps: int, repeat: int = 1) -> tuple[float, float]:
                           fixed_h=True)
     solver.setup(particles=[fluid, bnd], equations=scheme.get_equations(), nnps=nnps,
                  kernel=kernel, fixed_h=True)
-    return _time_steps(solver, case.n_particles, steps, case.dt, repeat)
+    return _stepper(solver, case.n_particles, case.dt)
 
 
 def main() -> None:
     from hybridwsi.sph import tank
 
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--steps2d", type=int, default=100)
-    ap.add_argument("--steps3d", type=int, default=10)
     ap.add_argument("--skip3d", action="store_true")
-    ap.add_argument("--repeat", type=int, default=3, help="timed blocks per rate (best kept)")
+    ap.add_argument("--repeat", type=int, default=REPEAT, help="alternating rounds")
     a = ap.parse_args()
     cases = [("2D hydrostatic tank 2.5 m x 1 m, dp = 0.01 m",
-              tank.hydrostatic(dp=0.01, depth=1.0, length=2.5, init="hydrostatic"), a.steps2d)]
+              tank.hydrostatic(dp=0.01, depth=1.0, length=2.5, init="hydrostatic"))]
     if not a.skip3d:
         cases.append(("3D sphere decay, quarter domain 1.2 x 1.2 x 0.9 m, dp = 0.025 m",
                       # the lattice start, fixed hold and wall viscosity of the README's
                       # recorded rate
-                      tank.decay3d(dp=0.025, packing="lattice", relax=0.0, alpha_wall=None),
-                      a.steps3d))
+                      tank.decay3d(dp=0.025, packing="lattice", relax=0.0, alpha_wall=None)))
     import hybridwsi.sph.run  # noqa: F401 - sets OMP_WAIT_POLICY before OpenMP loads
 
     print(f"OMP_NUM_THREADS={os.environ['OMP_NUM_THREADS']} "
-          f"OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}, best (median) of {a.repeat}")
-    for desc, case, steps in cases:
-        r_ours = ours(case, steps, a.repeat)
-        r_stock = stock(case, steps, a.repeat)
+          f"OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}")
+    for desc, case in cases:
+        t = compare(stock(case), {"ours": ours(case)}, repeat=a.repeat, warmup=False,
+                    baseline_label="stock")
         print(f"{desc}: {case.n_particles} particles ({case.fluid.get_number_of_particles()} "
-              f"fluid), {steps} steps, load average {os.getloadavg()[0]:.2f}")
+              f"fluid)")
         print(f"  hybridwsi tank (Adami walls, density diffusion, body coupling): "
-              f"{r_ours[0]:.3g} ({r_ours[1]:.3g}) particle-updates/s")
+              f"{1 / t['ours'].median:.3g} particle-updates/s (median)")
         print(f"  PySPH stock WCSPHScheme (dynamic boundary):                    "
-              f"{r_stock[0]:.3g} ({r_stock[1]:.3g}) particle-updates/s")
-        print(f"  ratio ours / stock = {r_ours[0] / r_stock[0]:.2f}")
+              f"{1 / t['stock'].median:.3g} particle-updates/s (median)")
+        print(f"  ratio ours / stock (rates) = {t['ours'].ratio_text(speedup=True)}")
+    print(conditions(repeat=a.repeat))
     print(RECORDED)
 
 if __name__ == "__main__":

@@ -106,7 +106,7 @@ def test_shared_options_share_one_definition(parsers):
     for name, p in parsers.items():
         acts = p._option_string_actions
         if "--mass" in acts:
-            assert acts["--mass"].type is o.positive_float, name
+            assert acts["--mass"].type is o.mass, name
             assert acts["--mass"].help.startswith("rigid-body mass [kg]"), name
         if "--coeffs" in acts:
             assert acts["--coeffs"].help.startswith("coefficient file"), name
@@ -341,3 +341,126 @@ def test_every_script_runs_through_the_cli_error_handling():
         if '__name__ == "__main__"' in text:
             assert "run_script(main)" in text, path.name
             assert "argparse.ArgumentParser(" not in text, path.name
+
+
+# ------------------------------------------------------- the last bad inputs (issue 31 item 7)
+@pytest.mark.parametrize("kind, text", [
+    (o.mass, "1e300"), (o.mass, "1e11"), (o.mass, "1e-300"), (o.mass, "0"), (o.mass, "nan"),
+    (o.wave_height, "1e300"), (o.wave_height, "31"), (o.wave_height, "0"),
+    (o.wave_heights, "0.1,1e300"),
+])
+def test_absurd_magnitudes_are_refused_with_the_range(kind, text):
+    with pytest.raises(argparse.ArgumentTypeError) as err:
+        kind(text)
+    if text not in ("nan", "0"):
+        assert "between" in str(err.value), err.value
+
+
+def test_absurd_seas_are_refused_by_the_wave_models_too():
+    # what simulate --jonswap/--regular and the sweep's workers build
+    from hybridwsi import waves
+
+    for build in (lambda: waves.JONSWAP(hs=1e300, tp=8.0), lambda: waves.Regular(8.0, 31.0)):
+        with pytest.raises(InputError, match="at most 30 m"):
+            build()
+    assert waves.JONSWAP(hs=19.0, tp=16.0).hs == 19.0
+
+
+def test_magnitudes_of_real_bodies_and_seas_pass():
+    # a 7 kg model sphere, the 657 000 t Seawise Giant; the paper's 5 cm sea, a 19 m Hs record
+    assert o.mass("7.06") == 7.06 and o.mass("6.57e8") == 6.57e8
+    assert o.wave_heights("0.05,19") == (0.05, 19.0)
+
+
+def test_sweep_unreachable_scheduler_is_one_line_and_leaves_nothing(tmp_path, monkeypatch,
+                                                                    capsys):
+    pytest.importorskip("distributed")
+    pytest.importorskip("zarr")
+    from hybridwsi import sweep
+
+    monkeypatch.setattr(sweep, "CONNECT_TIMEOUT", "1s")
+    out = tmp_path / "s"
+    rc = cli.main(["sweep", "--hs", "0.05", "--tp", "0.8", "--duration", "1", "--scheduler",
+                   "tcp://127.0.0.1:1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2
+    # the client connects before any progress bar or file: the error is the only output
+    assert err.count("\n") == 1 and err.startswith("error: cannot connect to the Dask "
+                                                   "scheduler tcp://127.0.0.1:1"), err
+    assert not out.exists()
+
+
+def test_sweep_whose_every_case_fails_clears_its_bar_and_leaves_nothing(tmp_path, capsys):
+    pytest.importorskip("zarr")
+    out = tmp_path / "s"
+    # 25 m waves on the 0.3 m sphere: its cap buoyancy leaves its domain in every case
+    rc = cli.main(["sweep", "--hs", "25", "--tp", "0.8", "--nonlinear-hydrostatics",
+                   "--duration", "2", "--scheduler", "synchronous", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2
+    # one line: the bar drawn with carriage returns, then blanked, then the error
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    bar, _, last = err.rstrip("\n").rpartition("\r")
+    assert "sweep:" in bar and bar.rsplit("\r", 1)[-1].strip() == "", "bar not cleared"
+    assert last.startswith("error: every case failed, nothing was written"), err
+    assert not out.exists()  # no manifest "running", no empty parts/
+
+
+def test_output_through_a_link_writes_where_it_points(tmp_path):
+    target = tmp_path / "results" / "h.nc"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "h.nc"
+    link.symlink_to(target)
+    assert cli.main(["simulate", "--case", "paper_sphere", "--duration", "0.5", "--out",
+                     str(link), "--quiet"]) == 0
+    assert link.is_symlink() and link.resolve() == target.resolve()
+    assert target.read_bytes()[:4] == b"\x89HDF"  # the history, in the file linked to
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["h.nc", "results"]
+    assert sorted(p.name for p in target.parent.iterdir()) == ["h.nc"]  # no temporary left
+
+
+# ------------------------------------------------- end-of-run warnings (issue 31 item 8)
+def test_end_of_run_warnings_are_printed_once_and_notes_as_notes():
+    import warnings
+
+    from hybridwsi.errors import Note
+
+    def command(_args):
+        for _ in range(2):  # one flag raised by two steps of a run (from two call sites)
+            warnings.warn("BEM coefficients (cached): added_mass_zero is NaN", UserWarning)
+        warnings.warn("BEM coefficients (cached): added_mass_zero is NaN", UserWarning,
+                      stacklevel=2)
+        warnings.warn("something else", UserWarning)
+        warnings.warn(Note("A(0) is not used"))
+        return 0
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert cli._run(argparse.Namespace(_run=command)) == 0
+    texts = [str(w.message) for w in caught]
+    assert texts == ["BEM coefficients (cached): added_mass_zero is NaN", "something else",
+                     "A(0) is not used"]
+    lines = [cli._format_warning(w.message, w.category, w.filename, w.lineno) for w in caught]
+    assert lines[0].startswith("warning: ") and lines[2] == "note: A(0) is not used\n"
+
+
+def test_reproduce_words_the_unused_a0_flag_as_information(tmp_path, monkeypatch):
+    import warnings
+
+    from hybridwsi.commands import reproduce as command
+    from hybridwsi.errors import Note
+
+    def run(out, **_kw):  # the BEM flag of the finite-depth sphere, from its two loads
+        for _ in range(2):
+            warnings.warn("BEM coefficients (cached): added_mass_zero is NaN (not computable "
+                          "for this water depth/Green function)", UserWarning)
+        warnings.warn("a real problem", UserWarning)
+
+    monkeypatch.setattr(command, "reproduce", run)  # the command's name for report.run
+    args = cli.build_parser().parse_args(["reproduce", "--quick", "--out", str(tmp_path / "r")])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert cli._run(args) == 0
+    kinds = [(w.category, str(w.message)) for w in caught]
+    assert kinds == [(Note, command.A0_NOTE), (UserWarning, "a real problem")]

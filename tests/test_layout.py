@@ -29,7 +29,7 @@ SRC = Path(hybridwsi.__file__).parent
 #: generators above it and reads the coefficient schema (``hydro.coefficients``) below it;
 #: ``units`` and ``cases`` are read by ``bodies`` (the paper sphere) and ``hydro.bem``.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors",),
+    ("errors", "limits"),
     ("hybridwsi",),  # the package's __init__ (its version)
     ("dofs", "_meta", "_numba", "files", "wind"),
     ("units", "waves"),

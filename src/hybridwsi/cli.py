@@ -27,7 +27,7 @@ from typing import NoReturn
 
 from hybridwsi import __version__
 from hybridwsi.commands._options import missing_dependency, one_line
-from hybridwsi.errors import HybridWSIError
+from hybridwsi.errors import HybridWSIError, Note
 
 #: command name -> module under hybridwsi.commands (module names are Python identifiers)
 COMMANDS: dict[str, str] = {
@@ -126,13 +126,13 @@ def _run(args: argparse.Namespace) -> int:
     """Run a parsed command; every user-fixable failure becomes one ``error:`` line.
 
     Warnings raised while the command runs are printed after it, one ``warning: ...`` line
-    each; when the command fails, only its error line is printed.
+    per distinct message (``note: ...`` for information); when the command fails, only its
+    error line is printed.
     """
     try:
         with _stop_on_sigterm(), warnings.catch_warnings(record=True) as caught:
             status = int(args._run(args) or 0)
-        for w in caught:  # re-issued, so that callers of main() still see them as warnings
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        _reissue_once(caught)
         return status
     except HybridWSIError as exc:
         print_error(str(exc))
@@ -151,6 +151,18 @@ def _run(args: argparse.Namespace) -> int:
         print_error(f"{what} (partial results were not written; re-run to resume)")
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     return EXIT_ERROR
+
+
+def _reissue_once(caught: list[warnings.WarningMessage]) -> None:
+    """Re-issue the warnings of a run (so that callers of main() still see them as warnings),
+    each distinct message once: the same flag raised by two steps of one run (cached BEM
+    coefficients loaded twice) is one line, not two."""
+    seen: set[tuple[type, str]] = set()
+    for w in caught:
+        key = (w.category, one_line(str(w.message)))
+        if key not in seen:
+            seen.add(key)
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def run_script(script_main: Callable[[], int | None]) -> NoReturn:
@@ -181,8 +193,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _format_warning(message, category, filename, lineno, line=None) -> str:
-    """A warning printed by the CLI: one ``warning: ...`` line, no source excerpt."""
-    return f"warning: {one_line(str(message))}\n"
+    """A warning printed by the CLI: one ``warning: ...`` line (``note: ...`` for a
+    :class:`~hybridwsi.errors.Note`), no source excerpt."""
+    label = "note" if issubclass(category, Note) else "warning"
+    return f"{label}: {one_line(str(message))}\n"
 
 
 if __name__ == "__main__":  # python -m hybridwsi.cli

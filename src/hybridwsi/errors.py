@@ -18,3 +18,8 @@ class InputError(HybridWSIError, ValueError):
 
 class SolverError(HybridWSIError, RuntimeError):
     """A numerical solver failed (integration diverged, BEM produced NaN, ...)."""
+
+
+class Note(UserWarning):
+    """Information worth a line at the end of a run, not a problem: the CLI prints it as
+    ``note: ...`` (a warning as ``warning: ...``)."""

@@ -25,7 +25,11 @@ NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
 
 
 def _atomic_target(path: str | os.PathLike) -> tuple[Path, str]:
+    """The file to replace and a temporary file beside it. A symbolic link is written
+    through: its target is replaced (in the target's folder), the link stays a link."""
     path = Path(path)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -35,8 +39,11 @@ def _atomic_target(path: str | os.PathLike) -> tuple[Path, str]:
 def atomic_write(path: str | os.PathLike, writer) -> Path:
     """Call ``writer(tmp_path)`` then rename the temporary file onto ``path``.
 
-    A crash or Ctrl-C while writing never leaves a half-written ``path`` behind.
+    A crash or Ctrl-C while writing never leaves a half-written ``path`` behind. When
+    ``path`` is a symbolic link, the file it points to is written (the link is kept).
+    Returns ``path`` as given.
     """
+    given = Path(path)
     path, tmp = _atomic_target(path)
     try:
         writer(tmp)
@@ -48,7 +55,7 @@ def atomic_write(path: str | os.PathLike, writer) -> Path:
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
-    return path
+    return given
 
 
 def _jsonable(obj: Any) -> Any:

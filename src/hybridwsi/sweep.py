@@ -36,9 +36,11 @@ versions.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
 import pickle
@@ -69,6 +71,8 @@ MANIFEST = "manifest.json"
 PARTIAL_PREFIX = ".sweep."
 #: ``run_sweep(scheduler=...)`` value that runs the cases in this process, without Dask
 SYNCHRONOUS = "synchronous"
+#: how long to try reaching a ``--scheduler`` before refusing it
+CONNECT_TIMEOUT = "10s"
 
 
 @dataclass
@@ -315,11 +319,13 @@ def _client(scheduler: str | None, n_workers: int):
         raise InputError("sweeps need Dask: pip install 'hybridwsi[sweep]'") from None
     if scheduler:
         try:
-            return Client(scheduler, timeout="10s"), None
+            return Client(scheduler, timeout=CONNECT_TIMEOUT), None
         except OSError as exc:
             raise InputError(f"cannot connect to the Dask scheduler {scheduler}: {exc}") from None
+    # CRITICAL only: a failing case is reported once, as a line of the final error, not
+    # as the worker's "Compute Failed" traceback on the console
     cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=40)
+                           dashboard_address=None, silence_logs=logging.CRITICAL)
     return Client(cluster), cluster
 
 
@@ -466,17 +472,21 @@ def run_sweep(
     if done:
         check_resume(out, current)
     todo = [c for c in cases if c["case_id"] not in done]
-    (out / PARTS).mkdir(parents=True, exist_ok=True)
-    for stale in (out / PARTS).glob(".*.tmp"):  # half-written parts of a killed run
-        stale.unlink(missing_ok=True)
-    clean_partials(out)
-    _write_manifest(out, cases, current, status="running")
-    failures: list[str] = []
-    if todo:  # load/compute and fit once, ship to the workers
-        shared = shared_objects(config, runner) if shared is None else shared
-        failures = _run_cases(todo, {**asdict(config), **shared}, out, runner, scheduler,
-                              n_workers, len(cases), progress)
+    # folders this run creates (``out`` and missing parents): removed if no case finishes
+    fresh = [p for p in (out, *out.parents) if not p.exists()]
+    # the Dask client first: an unreachable scheduler is one line with nothing written
+    with _connected(scheduler if todo else SYNCHRONOUS, n_workers) as client:
+        _start(out, cases, current)
+        try:
+            failures = _run_cases(todo, config, shared, out, runner, client, len(cases),
+                                  progress)
+        except BaseException:
+            _forget_empty(out, fresh)
+            raise
     if failures:
+        if _forget_empty(out, fresh):
+            raise SolverError("every case failed, nothing was written: " + "; ".join(
+                failures[:3]))
         raise SolverError(f"{len(failures)} case(s) failed (re-run with --resume to retry): "
                           + "; ".join(failures[:3]))
     if not consolidate_store:
@@ -487,31 +497,86 @@ def run_sweep(
     return path
 
 
-def _run_cases(todo: Sequence[dict], cfg: dict, out: Path, runner: Runner,
-               scheduler: str | None, n_workers: int, n_total: int, progress: bool
-               ) -> list[str]:
-    """Run ``todo`` (Dask, or in this process with ``scheduler="synchronous"``); return the
-    failures as one-line texts (the other cases still run)."""
-    from tqdm.auto import tqdm
+def _start(out: Path, cases: Sequence[dict], current: dict) -> None:
+    """``parts/`` ready (half-written parts and stores of a killed run removed) and the
+    manifest written with status "running"."""
+    (out / PARTS).mkdir(parents=True, exist_ok=True)
+    for stale in (out / PARTS).glob(".*.tmp"):
+        stale.unlink(missing_ok=True)
+    clean_partials(out)
+    _write_manifest(out, cases, current, status="running")
 
-    failures: list[str] = []
-    bar = tqdm(total=n_total, initial=n_total - len(todo), desc="sweep", unit="case",
-               disable=not progress)
+
+def _forget_empty(out: Path, fresh: Sequence[Path]) -> bool:
+    """Remove what a sweep that finished no case wrote (its "running" manifest, the empty
+    ``parts/``, the ``fresh`` folders this run created, deepest first); True if it did. A
+    sweep with finished parts keeps them and its manifest, for ``--resume``."""
+    if finished_cases(out):
+        return False
+    (out / MANIFEST).unlink(missing_ok=True)
+    for folder in (out / PARTS, *fresh):
+        try:
+            folder.rmdir()  # only when empty: never a file someone else put there
+        except OSError:
+            pass
+    return True
+
+
+@contextlib.contextmanager
+def _connected(scheduler: str | None, n_workers: int):
+    """The Dask client of :func:`_client` (``None`` for ``"synchronous"``), closed after."""
     if scheduler == SYNCHRONOUS:
-        # run on what a worker would receive: unpickled arrays are contiguous copies, and BLAS
-        # rounds a strided view (e.g. the state-space matrices) differently at 1e-16, so
-        # this keeps the in-process numbers bit-identical to the workers'
-        cfg = pickle.loads(pickle.dumps(cfg))
-        for c in todo:
-            try:
-                run_one(c, cfg, str(out), runner)
-            except Exception as exc:  # keep going; report all failed cases at the end
-                failures.append(f"case-{c['case_id']}: {type(exc).__name__}: {exc}")
-            bar.update(1)
-        bar.close()
-        return failures
+        yield None
+        return
     client, cluster = _client(scheduler, n_workers)
     try:
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+@contextlib.contextmanager
+def _progress(total: int, initial: int, progress: bool):
+    """A tqdm bar over cases, cleared from the console when the run fails (so the error
+    line that follows stands alone)."""
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, initial=initial, desc="sweep", unit="case", disable=not progress)
+    try:
+        yield bar
+    except BaseException:
+        bar.leave = False
+        raise
+    finally:
+        bar.close()
+
+
+def _run_cases(todo: Sequence[dict], config: SweepConfig, shared: dict | None, out: Path,
+               runner: Runner, client: Any, n_total: int, progress: bool) -> list[str]:
+    """Run ``todo`` on ``client`` (``None``: in this process); return the failures as
+    one-line texts (the other cases still run)."""
+    failures: list[str] = []
+    if not todo:
+        return failures
+    # load/compute and fit once, ship to the workers
+    shared = shared_objects(config, runner) if shared is None else shared
+    cfg = {**asdict(config), **shared}
+    with _progress(n_total, n_total - len(todo), progress) as bar:
+        if client is None:
+            # run on what a worker would receive: unpickled arrays are contiguous copies, and
+            # BLAS rounds a strided view (e.g. the state-space matrices) differently at
+            # 1e-16, so this keeps the in-process numbers bit-identical to the workers'
+            cfg = pickle.loads(pickle.dumps(cfg))
+            for c in todo:
+                try:
+                    run_one(c, cfg, str(out), runner)
+                except Exception as exc:  # keep going; report all failed cases at the end
+                    failures.append(f"case-{c['case_id']}: {type(exc).__name__}: {exc}")
+                bar.update(1)
+            bar.leave = not failures  # the error line that follows stands alone
+            return failures
         from distributed import as_completed
 
         cfg_f = client.scatter(cfg, broadcast=True)
@@ -523,11 +588,7 @@ def _run_cases(todo: Sequence[dict], cfg: dict, out: Path, runner: Runner,
             except Exception as exc:  # keep going; report all failed cases at the end
                 failures.append(f"{fut.key}: {type(exc).__name__}: {exc}")
             bar.update(1)
-        bar.close()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        bar.leave = not failures  # the error line that follows stands alone
     return failures
 
 

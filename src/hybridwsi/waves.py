@@ -66,9 +66,19 @@ import xarray as xr
 
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
+from hybridwsi.limits import MAX_WAVE_HEIGHT
 
 G = 9.81
 _BLOCK = 1 << 20  # values of the (time × component) phase matrix evaluated at once
+
+
+def _height(name: str, value: float) -> float:
+    """A wave height [m]: positive and at most :data:`~hybridwsi.limits.MAX_WAVE_HEIGHT`."""
+    v = _positive(name, value)
+    if v > MAX_WAVE_HEIGHT:
+        raise InputError(f"{name} must be at most {MAX_WAVE_HEIGHT:g} m (the highest wave "
+                         f"measured at sea), got {value!r}")
+    return v
 
 
 def _positive(name: str, value: float) -> float:
@@ -198,7 +208,7 @@ class Regular(Wave):
 
     def __post_init__(self) -> None:
         self.period = _positive("wave period", self.period)
-        self.height = _positive("wave height", self.height)
+        self.height = _height("wave height", self.height)
         if not np.isfinite(self.phase):
             raise InputError("wave phase must be finite")
 
@@ -288,7 +298,7 @@ class JONSWAP(Wave):
     _norm: float = field(default=1.0, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        self.hs = _positive("Hs", self.hs)
+        self.hs = _height("Hs", self.hs)
         self.tp = _positive("Tp", self.tp)
         if not (np.isfinite(self.gamma) and self.gamma >= 1):
             raise InputError(f"JONSWAP gamma must be >= 1, got {self.gamma}")

@@ -731,7 +731,7 @@ CASE = Table(fields={
                                            doc="published natural frequencies (tests)"),
     "hybrid": _HYBRID,
     # reference data of the built-in cases (the paper's and the experiments' numbers)
-    "paper_values": Table(fields={"A_inf": Number(unit="kg"), "C": Number(unit="N/m"),
+    "paper_values": Table(fields={"added_mass_inf": Number(unit="kg"), "C": Number(unit="N/m"),
                                   "Te": positive("s")}, doc="as printed in the paper"),
     "paper_table1": MapOf(value=MapOf(value=Table(fields={
         "alpha": Number(unit="kg"), "beta": Number(unit="N s/m"),

@@ -25,6 +25,7 @@ from hybridwsi.dofs import check_dofs
 from hybridwsi.errors import InputError
 from hybridwsi.history import select_dofs
 from hybridwsi.importers import FORMATS, detect_format, read_history
+from hybridwsi.limits import MASS_RANGE, MAX_WAVE_HEIGHT
 
 
 
@@ -75,6 +76,25 @@ def fraction(text: str) -> float:
     return value
 
 
+def mass(text: str) -> float:
+    """argparse type: a rigid-body mass [kg] within :data:`MASS_RANGE`."""
+    value = finite_float(text)
+    low, high = MASS_RANGE
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"a floating body's mass is between {low:g} and "
+                                         f"{high:g} kg, got {text!r}")
+    return value
+
+
+def wave_height(text: str) -> float:
+    """argparse type: a wave height [m] in (0, :data:`MAX_WAVE_HEIGHT`]."""
+    value = positive_float(text)
+    if value > MAX_WAVE_HEIGHT:
+        raise argparse.ArgumentTypeError(f"a wave height is between 0 and {MAX_WAVE_HEIGHT:g} m "
+                                         f"(the highest measured at sea), got {text!r}")
+    return value
+
+
 def positive_int(text: str) -> int:
     """argparse type: an integer >= 1."""
     value = _number(text, int, "an integer")
@@ -106,6 +126,8 @@ def _list(item: Callable[[str], Any]) -> Callable[[str], tuple]:
 finite_floats = _list(finite_float)
 #: argparse type: comma-separated positive numbers, e.g. ``0.05,0.1``
 positive_floats = _list(positive_float)
+#: argparse type: comma-separated wave heights [m] (:func:`wave_height`), e.g. ``1,2.5``
+wave_heights = _list(wave_height)
 #: argparse type: comma-separated positive integers, e.g. ``32,32``
 positive_ints = _list(positive_int)
 
@@ -253,8 +275,8 @@ def add_coeffs(p: argparse.ArgumentParser, help: str, *, group: Any = None) -> N
 
 
 def add_mass(p: argparse.ArgumentParser, help: str, default: float | None = None) -> None:
-    """``--mass M``: the rigid-body mass [kg] (positive, finite)."""
-    p.add_argument("--mass", type=positive_float, default=default, metavar="KG",
+    """``--mass M``: the rigid-body mass [kg] (within :data:`MASS_RANGE`)."""
+    p.add_argument("--mass", type=mass, default=default, metavar="KG",
                    help=f"rigid-body mass [kg]: {help}")
 
 

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import warnings
 from pathlib import Path
 
 from hybridwsi.commands import _options as o
 from hybridwsi.commands._options import require
-from hybridwsi.errors import InputError
+from hybridwsi.errors import InputError, Note
 from hybridwsi.files import check_output_path
 from hybridwsi.report.reproduce import run as reproduce
 
@@ -54,9 +55,22 @@ def check_inputs(args: argparse.Namespace) -> None:
         require("pysph")
 
 
+#: a BEM quality flag the report has no use for: A(0) (its radiation comes from A∞ and the
+#: impulse response), printed as information rather than as a problem
+UNUSED_A0 = "added_mass_zero is NaN"
+A0_NOTE = ("BEM coefficients: A(0) (added_mass_zero) is not computable for this water depth "
+           "and Green function; the report does not use A(0)")
+
+
 def run(args: argparse.Namespace) -> int:
     check_inputs(args)
-    reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay,
-              hybrid=not args.no_hybrid, recompute_sph=args.recompute_sph,
-              sph_path=args.sph_history, sph_dp=args.sph_dp, sph_openmp=args.sph_openmp)
+    with warnings.catch_warnings(record=True) as caught:
+        reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay,
+                  hybrid=not args.no_hybrid, recompute_sph=args.recompute_sph,
+                  sph_path=args.sph_history, sph_dp=args.sph_dp, sph_openmp=args.sph_openmp)
+    for w in caught:
+        if UNUSED_A0 in str(w.message):
+            warnings.warn(Note(A0_NOTE), stacklevel=1)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return 0

@@ -37,7 +37,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                   "heave")
     o.add_mooring(p)
     o.add_rotor(p)
-    p.add_argument("--hs", required=True, type=o.positive_floats, metavar="HS[,HS...]",
+    p.add_argument("--hs", required=True, type=o.wave_heights, metavar="HS[,HS...]",
                    help="significant wave heights [m], comma-separated")
     p.add_argument("--tp", required=True, type=o.positive_floats, metavar="TP[,TP...]",
                    help="peak periods [s], comma-separated")

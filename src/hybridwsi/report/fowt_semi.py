@@ -234,12 +234,13 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
         entry["where"], entry["reason"] = fd.verdict_line(entry)
         rows.append(entry)
     mass = fd.rigid_mass(hist)
-    a_inf = np.asarray(hist["added_mass_inf"].values)
+    added_mass_inf = np.asarray(hist["added_mass_inf"].values)
     return {"history": {"duration_s": float(hist["time"].values[-1]), "dt": dt, "dofs": dofs,
                         "wave": hist.attrs.get("wave")},
             "std_z": dict(zip(dofs, np.asarray(hist["z"].values).std(axis=0).tolist())),
-            "mass": mass.tolist(), "added_mass_inf": a_inf.tolist(),
-            "rho_M_inv_A_inf": stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
+            "mass": mass.tolist(), "added_mass_inf": added_mass_inf.tolist(),
+            "rho_M_inv_A_inf": stability.added_mass_ratio(mass, np.zeros_like(mass),
+                                                             added_mass_inf),
             "partitions": rows}
 
 
@@ -268,11 +269,12 @@ def semi_mode_variants(system: SemiSystem) -> dict[str, float]:
             f = float(freqs(co.at_frequency(c, "added_mass", 2 * math.pi * f), idx)[which])
         return f
 
-    a_inf = co.matrix(c, "added_mass_inf")
+    added_mass_inf = co.matrix(c, "added_mass_inf")
     return {"surge_coupled": own([0, 4], 0, 0.009), "pitch_coupled": own([0, 4], 1, 0.04),
-            "surge_coupled_A_inf": float(freqs(a_inf, [0, 4])[0]),
-            "pitch_coupled_A_inf": float(freqs(a_inf, [0, 4])[1]),
-            "pitch_alone": own([4], 0, 0.04), "pitch_alone_A_inf": float(freqs(a_inf, [4])[0])}
+            "surge_coupled_A_inf": float(freqs(added_mass_inf, [0, 4])[0]),
+            "pitch_coupled_A_inf": float(freqs(added_mass_inf, [0, 4])[1]),
+            "pitch_alone": own([4], 0, 0.04),
+            "pitch_alone_A_inf": float(freqs(added_mass_inf, [4])[0])}
 
 
 def mooring_amplitude_ratio(case: Mapping[str, Any], dof: str, amplitudes: Sequence[float]

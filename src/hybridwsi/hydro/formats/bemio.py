@@ -119,8 +119,8 @@ def read(path: str | Path) -> xr.Dataset:
         b = _get(f, hc + "radiation_damping/all", where)
         re, im = _get(f, hc + "excitation/re", where), _get(f, hc + "excitation/im", where)
         c = _get(f, hc + "linear_restoring_stiffness", where)
-        a_inf = _get(f, hc + "added_mass/inf_freq", where) if hc + "added_mass/inf_freq" in f \
-            else None
+        inf = hc + "added_mass/inf_freq"
+        added_mass_inf = _get(f, inf, where) if inf in f else None
         disp = float(_get(f, "body1/properties/disp_vol", where).reshape(-1)[0]) \
             if "body1/properties/disp_vol" in f else math.nan
     n_w, n_b = omega.size, beta.size
@@ -143,7 +143,7 @@ def read(path: str | Path) -> xr.Dataset:
     exc = np.conj(np.transpose(re[:6] + 1j * im[:6], (2, 1, 0))) * rho * g  # e^{+iωt} → e^{−iωt}
     return build(omega=omega, dofs=RIGID_DOFS, added_mass=added, radiation_damping=damping,
                  excitation=exc, directions=beta,
-                 added_mass_inf=None if a_inf is None else rows_cols(a_inf) * rho,
+                 added_mass_inf=None if added_mass_inf is None else rows_cols(added_mass_inf) * rho,
                  added_mass_zero=None, hydrostatic_stiffness=np.asarray(c, float)[:6, :6] * rho * g, mass=None,
                  rho=rho, g=g, water_depth=depth, source=f"WEC-Sim BEMIO {where}",
                  input_hash=content_hash([path], {}), where=where,
