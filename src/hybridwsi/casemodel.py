@@ -562,6 +562,14 @@ class CaseModel:
             ss = radiation_ss(coeffs, dofs, None, dt, case.get("radiation"))
         return cls(case, dofs, coeffs, model, table, dt, ss)
 
+    def radiation_ss_at(self, dt: float) -> RadiationSS:
+        """The radiation state space for the step ``dt`` [s]: the one built with the model
+        when it was built for that step (a fit costs seconds: OC3 3 DOFs ~4 s), else a fit
+        now (:func:`radiation_ss`, the case's ``[radiation]`` settings)."""
+        if self.radiation_ss is not None and self.dt is not None and math.isclose(self.dt, dt):
+            return self.radiation_ss
+        return radiation_ss(self.coeffs, self.dofs, None, dt, self.case.get("radiation"))
+
     @cached_property
     def body(self) -> Any:
         """The case's body (:func:`body_from_case`)."""

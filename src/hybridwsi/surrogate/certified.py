@@ -137,8 +137,7 @@ def prepare_histories(hists: Sequence[xr.Dataset], names: Sequence[str], model: 
     ``eta``, ``F_tot = M z̈``, the case's mass and radiation state space at their Δt."""
     check_cases(hists, names, model.case.sha256, model.case.label)
     dofs = list(model.dofs)
-    ss = json.dumps(radiation_ss(model.coeffs, dofs, None, time_step(hists[0]),
-                                 model.case.get("radiation")).to_dict())
+    ss = json.dumps(model.radiation_ss_at(time_step(hists[0])).to_dict())
     out = []
     for h, name in zip(hists, names):
         missing = [v for v in KINEMATICS if v not in h]
@@ -365,8 +364,7 @@ class CertifiedModel:
                             mass=np.asarray(pipe.mass_), check=False,
                             extra_vars={"eta": (("time", "probe"), eta[:, None],
                                                 elevation_attrs(ramp))})
-        case.attrs["radiation_ss"] = json.dumps(radiation_ss(
-            model.coeffs, dofs, None, dt, model.case.get("radiation")).to_dict())
+        case.attrs["radiation_ss"] = json.dumps(model.radiation_ss_at(dt).to_dict())
         pipe.known_ = [*build_candidates(case, model.coeffs, pipe.candidates_).values(),
                        *case_linear(model)]
         # diverged: |z| above BLOWUP_FACTOR x the largest the training saw
