@@ -248,7 +248,9 @@ def test_a_history_with_unramped_eta_gets_its_recorded_ramp(sphere):
 @pytest.mark.slow
 def test_done_means_oc3_user_case(tmp_path):
     """Issue 28 "done means": a user's copy of the OC3 case, two seas, auto partition, a third
-    sea: surge and pitch within 3 % RMS of the reference run (measured 0.85 %, 0.53 %)."""
+    sea: surge and pitch within 3 % RMS of the reference run (measured 0.51 %, 0.41 %); the
+    same with the training histories stripped to time, motions and η without file attributes
+    (measured 2.0 %, 1.5 %)."""
     from importlib.resources import files
 
     src = files("hybridwsi.cases")
@@ -265,8 +267,15 @@ def test_done_means_oc3_user_case(tmp_path):
                  "--partition", "auto", "--out", str(tmp_path / "model"), "--quiet"]) == 0
     assert main(["simulate", "--case", case, "--jonswap", "5", "11", "--seed", "3", *run,
                  "--network", str(tmp_path / "model"), "--out", str(tmp_path / "hyb.nc")]) == 0
-    hyb, ref = xr.open_dataset(tmp_path / "hyb.nc"), xr.open_dataset(tmp_path / "ref.nc")
-    z, z_ref = hyb["z"].values, ref["z"].values
-    err = np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.sqrt(np.mean(z_ref ** 2, 0))
-    dofs = [str(d) for d in hyb["dof"].values]
-    assert err[dofs.index("Surge")] < 0.03 and err[dofs.index("Pitch")] < 0.03
+    stripped = [_stripped(tmp_path / f"{k}.nc", tmp_path / f"{k}_stripped.nc") for k in "ab"]
+    assert main(["hybrid", *stripped, "--case", case, "--partition", "auto",
+                 "--out", str(tmp_path / "model_s"), "--quiet"]) == 0
+    assert main(["simulate", "--case", case, "--jonswap", "5", "11", "--seed", "3", *run,
+                 "--network", str(tmp_path / "model_s"), "--out", str(tmp_path / "hyb_s.nc")]) == 0
+    ref = xr.open_dataset(tmp_path / "ref.nc")
+    z_ref = ref["z"].values
+    dofs = [str(d) for d in ref["dof"].values]
+    for name in ("hyb.nc", "hyb_s.nc"):
+        z = xr.open_dataset(tmp_path / name)["z"].values
+        err = np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.sqrt(np.mean(z_ref ** 2, 0))
+        assert err[dofs.index("Surge")] < 0.03 and err[dofs.index("Pitch")] < 0.03, (name, err)
