@@ -183,7 +183,7 @@ def _stripped(src, dst):
     h = read_netcdf(src)[["z", "zdot", "zddot", "eta"]]
     h.attrs = {}
     for v in h.variables.values():
-        v.attrs = {k: a for k, a in v.attrs.items() if k == "units"}
+        v.attrs = {k: a for k, a in v.attrs.items() if k in ("units", "units_per_dof")}
     h.to_netcdf(dst)
     return str(dst)
 
