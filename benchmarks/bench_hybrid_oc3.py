@@ -20,6 +20,15 @@ of the wall time (``time.perf_counter``):
   at Δt, ~4 s for OC3), what ``simulate --case`` and ``simulate --case --network`` do after
   the interpreter has started (its imports, ~1.5 s of CPU, are left out of both).
 
+Measured 2026-12-05 (2 shared cores, load 2.9-3.7): linear 0.223 s [0.216, 0.247], hybrid
+0.098 s [0.089, 0.101] (2.7 us/step, 36 900x real time, 0.44x the linear run); from the case
+2.29 s and 1.93 s (1870x real time, 0.84x). Before ``CertifiedModel.simulate`` reused the case
+model's radiation state space it refitted it per run: hybrid 9.1 s vs linear 1.0 s under load
+9 (9x, 394x real time). As processes (``/usr/bin/time``, interpreter start and imports
+included, torch ~1.5 s, the command parser ~2.3 s): ``simulate --case my_spar.toml --network``
+8.7 s wall, 5.3 s CPU (414x real time) against 7.1 s, 4.5 s CPU for the case's full nonlinear
+``simulate --case`` of the same hour: the solver is no longer what a run costs.
+
 Run: ``python benchmarks/bench_hybrid_oc3.py`` (set-up about 2 min, then ~1 min). Compare the
 ratios printed within one run; on a shared machine the wall times scatter (the spread says
 how much).
