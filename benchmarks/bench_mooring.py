@@ -33,6 +33,18 @@ literal hour).
 on the wave kinematics, additional damping, the operating NREL 5-MW rotor at rated (11.4 m/s,
 turbulence intensity 0.1, Kaimal), Newman's slow drift — in a JONSWAP sea (Hs 6 m, Tp 12 s,
 200 components), starting from the mean offset; MoorDyn against the tabulated mooring.
+
+``--hybrid``: the two hybrids of ``scripts/oc3_moordyn_hybrid.py`` (the shipped networks
+``hybridwsi/data/oc3_moordyn_hybrid*_network``; ``hybrid``: the quasi-static mooring and the
+rotor in the ODE, NumPy stepper; ``hybrid_lin``: a linear known part, compiled loop;
+``corrected`` coupling) against their MoorDyn-coupled reference on the same sea and wind (the
+first held-out sea: Hs 4.5 m, Tp 10.5 s, 8.5 m/s, TI 0.1; Surge, Heave, Pitch; Δt 0.1 s),
+side by side, alternating ``--repeat`` times (≥ 3). A hybrid's time includes what it needs
+per sea besides the rollout (the excitation and η, the mean offset, the rotor's wind force,
+the known components, the quasi-static tensions); the case model and the network are loaded
+once. The reference's includes MoorDyn's static initialisation. Prints the wall times, the
+median ratios (target ≥ 50×) and each hybrid's RMS surge and pitch error against the
+reference of the same sample.
 """
 
 from __future__ import annotations
@@ -147,6 +159,51 @@ def design_cost(duration: float, repeat: int) -> None:
              duration, repeat, f"dt {dt} s; components {', '.join(comps)}; {DESIGN}")
 
 
+def hybrid_cost(duration: float, repeat: int) -> None:
+    """``--hybrid``: both hybrids against the MoorDyn-coupled reference (module doc)."""
+    from hybridwsi.report import fowt_moordyn_hybrid as fmh
+    from hybridwsi.surrogate.network import ForceNetwork
+
+    shipped = fmh.load_shipped()[0]["prediction"]
+    nets = {k: ForceNetwork.load(path) for k, path in fmh.NETWORKS.items()}
+    name, sea = next(iter(fmh.HELD.items()))
+    model = fmh.case_model(sea, "table")  # built once, like loading the network
+
+    def run_hybrid(k: str):
+        case = fmh.hybrid_case(sea, duration, nets[k], model)
+        return fmh.run_hybrid(nets[k], case, model, k,
+                              corrections=shipped[k]["corrections"])[0]
+
+    for k in nets:
+        run_hybrid(k)  # warm-up (Numba kernels, torch)
+    walls: dict[str, list[float]] = {"moordyn": [], **{k: [] for k in nets}}
+    out = {}
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out["moordyn"] = fmh.simulate("moordyn", sea, duration)
+        walls["moordyn"].append(time.perf_counter() - t0)
+        for k in nets:
+            t0 = time.perf_counter()
+            out[k] = run_hybrid(k)
+            walls[k].append(time.perf_counter() - t0)
+    print(f"{duration:.0f} s simulated, sea {name} {sea}, {', '.join(fmh.DOFS)}, dt {fmh.DT} s, "
+          f"{repeat} alternating samples (MoorDyn, then each hybrid)")
+    for k, v in walls.items():
+        print(f"{k:10s}: median {np.median(v):8.3f} s wall (min {min(v):.3f}, max "
+              f"{max(v):.3f}) = {duration / np.median(v):8.1f}x real time")
+    ref = out["moordyn"]
+    for k in nets:
+        ratios = np.array(walls["moordyn"]) / np.array(walls[k])
+        t = out[k]["time"].values
+        err = {d: float(np.sqrt(np.mean((out[k]["z"].sel(dof=d).values - ref["z"].sel(dof=d).sel(
+            time=t, method="nearest").values) ** 2) / np.mean(ref["z"].sel(dof=d).values ** 2)))
+            for d in ("Surge", "Pitch")}
+        print(f"ratio MoorDyn-coupled / {k}: median {np.median(ratios):.1f}x (min "
+              f"{ratios.min():.1f}, max {ratios.max():.1f}); target >= 50x: "
+              f"{'met' if np.median(ratios) >= 50 else 'NOT met'}; RMS error / RMS vs the "
+              "reference: " + ", ".join(f"{d} {100 * e:.2f} %" for d, e in err.items()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=2000, help="interpolant calls per run")
@@ -157,9 +214,15 @@ def main() -> None:
     parser.add_argument("--design", action="store_true",
                         help="the MoorDyn-coupled design-fidelity case run (rotor, drift, "
                              "drag) against the same with the tabulated mooring")
+    parser.add_argument("--hybrid", action="store_true",
+                        help="the hybrid of scripts/oc3_moordyn_hybrid.py against its "
+                             "MoorDyn-coupled reference on the same sea")
     parser.add_argument("--duration", type=float, default=600.0,
-                        help="--moordyn/--design: simulated time per sample [s]")
+                        help="--moordyn/--design/--hybrid: simulated time per sample [s]")
     args = parser.parse_args()
+    if args.hybrid:
+        hybrid_cost(args.duration, max(args.repeat, 3))
+        return
     if args.moordyn or args.design:
         (design_cost if args.design else moordyn_cost)(args.duration, max(args.repeat, 5))
         return

@@ -1,12 +1,12 @@
 """Seed ensembles and the capacity of the Kramer hybrid's network (issue 14, the 0.3D target).
 
-Two studies of the network residual of ``hybridwsi.report.kramer_hybrid`` (docs/KRAMER_HYBRID.md,
+Two studies of the network residual of ``hybridwsi.surrogate.kramer`` (docs/KRAMER_HYBRID.md,
 section "Ensembles and the network's capacity"):
 
 ``ensemble`` (leave one drop out, nothing chosen on the held-out drop)
     For each held-out drop H and each seed s, the network is trained exactly as shipped (one-step
     fit on the training drops' ``F_bb`` with ``seed=s``, then multi-step training on their heave
-    with H's nested-LOO iteration count (``kramer_hybrid.select_iterations``, as the study
+    with H's nested-LOO iteration count (``kramer.select_iterations``, as the study
     selects it) and the release lead of
     the structured fit on the same two drops) and rolled out on H alone. The ensemble's residual
     force is the mean of the K networks' forces inside ONE rollout: the K MLPs are merged into
@@ -44,7 +44,9 @@ import numpy as np
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import atomic_write
 from hybridwsi.importers.kramer import read_kramer_drop
-from hybridwsi.report import kramer_hybrid as kh
+from hybridwsi.surrogate import kramer as kh
+from hybridwsi.surrogate import multistep as ms
+from hybridwsi.surrogate import structured as st
 
 OUT = Path("results/kramer_ensemble")
 RUNS = OUT / "runs.jsonl"
@@ -98,8 +100,8 @@ class Data:
         if hit:
             return float(hit["lead_s"])
         c = clock()
-        _, lead, _ = kh.fit_output_error(self.setup, {d: self.curves[d] for d in drops},
-                                         np.zeros(len(kh.STRUCTURED_TERMS)), kh.STRUCTURED_FREE,
+        _, lead, _ = st.fit_output_error(self.setup, {d: self.curves[d] for d in drops},
+                                         np.zeros(len(st.STRUCTURED_TERMS)), kh.STRUCTURED_FREE,
                                          dt=kh.FIT_DT[False], fit_lead=True)
         row = {"kind": "lead", "drops": drops, "lead_s": float(lead), **since(c)}
         append(row)
@@ -129,7 +131,7 @@ class Data:
 
 
 def seeded_network(hists: list[Any], seed: int) -> Any:
-    """``kramer_hybrid.fit_network`` with another seed (everything else as shipped)."""
+    """``kramer.fit_network`` with another seed (everything else as shipped)."""
     return kh.fit_network(hists, seed=int(seed))
 
 
@@ -214,7 +216,7 @@ def run_ensemble(folds: list[str], seeds: list[int]) -> None:
                 continue
             c = clock()
             net = seeded_network([data.measured[d] for d in train], seed)
-            fit = kh.train_network_on_heave(net, data.setup,
+            fit = ms.train_network_on_heave(net, data.setup,
                                             {d: data.curves[d] for d in train}, lead,
                                             iterations=iters)
             OUT.mkdir(parents=True, exist_ok=True)
@@ -241,8 +243,8 @@ def run_ensemble(folds: list[str], seeds: list[int]) -> None:
 class AbsDragInput:
     """A ``ForceNetwork`` of ``(z, ż, |ż|ż)`` seen as a network of ``(z, ż)``.
 
-    ``forward`` appends the channel, so :func:`kramer_hybrid.torch_decays` and
-    :func:`kramer_hybrid.train_network_on_heave` use it unchanged (script only; the shipped
+    ``forward`` appends the channel, so :func:`multistep.torch_decays` and
+    :func:`multistep.train_network_on_heave` use it unchanged (script only; the shipped
     rollout builds its channels from the history's z, ż, z̈, η).
     """
 
@@ -282,7 +284,7 @@ def torch_scored(data: Data, net: Any, drop: str, lead: float, dt: float = 0.001
 
     n = int(round(kh.ROLL_DURATION / dt))
     with torch.no_grad():
-        z = kh.torch_decays(net, data.setup, np.array([data.setup.drop_heights[drop]]), dt,
+        z = ms.torch_decays(net, data.setup, np.array([data.setup.drop_heights[drop]]), dt,
                             n).numpy()[0]
     t = np.arange(n + 1) * dt - lead
     return data.score(t, z, drop)
@@ -311,7 +313,7 @@ def run_capacity(drops: list[str], iterations: int, seeds: list[int], channels: 
             net = seeded_network(hists, seed) if variant == "z,zdot" else \
                 abs_drag_network(hists, seed)
             start = {d: torch_scored(data, net, d, lead)["rms"] for d in drops}
-            fit = kh.train_network_on_heave(net, data.setup, target, lead,
+            fit = ms.train_network_on_heave(net, data.setup, target, lead,
                                             iterations=iterations, validation=target)
             row = {**key, "release_lead_s": lead, "fit_rms": fit["rms"],
                    "checkpoints": fit["checkpoints"], "fit_rms_every_10": fit["validation_rms"],

@@ -1,7 +1,7 @@
 """Issue 14 item 1: why does our exact-hydrostatics Cummins model score 0.0133 at 0.1D and LPF2 0.0107?
 
 Each candidate effect is changed *alone* on the physics baseline (exact hydrostatics, shipped BEM
-coefficients, radiation state space, RK4 at 1 ms: :func:`hybridwsi.report.kramer_hybrid.
+coefficients, radiation state space, RK4 at 1 ms: :func:`hybridwsi.surrogate.structured.
 integrate_decay`, identical to ``cummins.simulate(nonlinear_hydrostatics=True)``) and the RMS of
 heave/H0 over [0, 5 Te0] (the decay table's) is printed for the three drops; then the decay rate
 and period of every published code are fitted (damped oscillator over [1, 5] Te0) and the missing
@@ -29,14 +29,15 @@ from hybridwsi.hydro import bem
 from hybridwsi.hydro.irf import radiation_irf
 from hybridwsi.hydro.statespace import fit_radiation_ss
 from hybridwsi.importers.kramer import kramer_numerical_files, read_kramer_numerical
-from hybridwsi.report import kramer_hybrid as kh
-from hybridwsi.report.validation import rms_heave_error
+from hybridwsi.surrogate import kramer as kh
+from hybridwsi.surrogate import structured as st
+from hybridwsi.history import rms_heave_error
 from hybridwsi.importers.kramer import read_kramer_drop
 
 
 def scores(setup, exp, coef=None, lead=0.0, dt=None) -> list[float]:
     h0 = np.array([setup.drop_heights[d] for d in kh.DROPS])
-    t, z = kh.integrate_decay(setup, h0, coef, duration=4.0, dt=dt)
+    t, z = st.integrate_decay(setup, h0, coef, duration=4.0, dt=dt)
     out = []
     for k, d in enumerate(kh.DROPS):
         te, ze = exp[d]
@@ -54,7 +55,7 @@ def release_lead(setup, exp) -> dict[str, float]:
     out = {}
     for d in kh.DROPS:
         te, ze = exp[d]
-        t, z = kh.integrate_decay(setup, setup.drop_heights[d], duration=0.1, dt=1e-4)
+        t, z = st.integrate_decay(setup, setup.drop_heights[d], duration=0.1, dt=1e-4)
         early = (te > 0.005) & (te < 0.035)
         leads = np.arange(-0.004, 0.008, 1e-4)
         err = [np.sum((np.interp(te[early] + s, t, z / setup.drop_heights[d]) - ze[early]) ** 2)
@@ -74,7 +75,7 @@ def main() -> None:
         e = read_kramer_drop(d, normalised=True)
         exp[d] = (e["time"].values, e["z"].values[:, 0])
     rows: dict[str, list[float]] = {}
-    b = np.zeros(len(kh.STRUCTURED_TERMS))
+    b = np.zeros(len(st.STRUCTURED_TERMS))
     rows["baseline (1 ms, state space, shipped BEM)"] = scores(setup, exp)
     rows["time step 0.5 ms"] = scores(setup, exp, dt=0.0005)
     rows["time step 4 ms"] = scores(setup, exp, dt=0.004)
@@ -88,9 +89,9 @@ def main() -> None:
     rows["BEM only up to 20 rad/s (tail fitted there)"] = scores(
         dataclasses.replace(setup, memory=memory_from(low)), exp)
     a40 = float(setup.coeffs["added_mass"].values[-1, 0, 0])
-    rows[f"A_inf = A(40 rad/s) = {a40:.3f} kg instead of {setup.a_inf:.3f}"] = scores(
-        dataclasses.replace(setup, a_inf=a40), exp)
-    rows["A_inf + 1 %"] = scores(dataclasses.replace(setup, a_inf=1.01 * setup.a_inf), exp)
+    rows[f"A_inf = A(40 rad/s) = {a40:.3f} kg instead of {setup.added_mass_inf:.3f}"] = scores(
+        dataclasses.replace(setup, added_mass_inf=a40), exp)
+    rows["A_inf + 1 %"] = scores(dataclasses.replace(setup, added_mass_inf=1.01 * setup.added_mass_inf), exp)
     rows["m = 7.06 kg instead of 7.056"] = scores(dataclasses.replace(setup, mass=7.06), exp)
     g81 = bodies.FloatingSphere(radius=0.15, mass=7.056 * 9.81 / 9.82 * 9.82 / 9.81,
                                 center_of_mass=(0.0, 0.0, -0.0348),
@@ -106,9 +107,9 @@ def main() -> None:
     for v in ("added_mass", "radiation_damping", "added_mass_inf", "hydrostatic_stiffness"):
         c1000[v] = setup.coeffs[v] * f
     rows["rho = 1000 (A, B, C, m scaled: floats at the same draft)"] = scores(
-        dataclasses.replace(setup, body=r1000, mass=setup.mass * f, a_inf=setup.a_inf * f,
+        dataclasses.replace(setup, body=r1000, mass=setup.mass * f, added_mass_inf=setup.added_mass_inf * f,
                             stiffness=setup.stiffness * f, memory=memory_from(c1000)), exp)
-    b[kh.STRUCTURED_TERMS.index("b1")] = 0.6
+    b[st.STRUCTURED_TERMS.index("b1")] = 0.6
     rows["+ 0.6 N s/m linear damping (the LPF codes' missing damping)"] = scores(setup, exp, b)
     if args.bem:
         body = bodies.FloatingSphere.kramer2021()
@@ -119,7 +120,7 @@ def main() -> None:
         for name, kw in pairs.items():
             c = bem.compute(body, w, n_panels=400, progress=False, **kw)
             s = dataclasses.replace(setup, memory=memory_from(c),
-                                    a_inf=float(c["added_mass_inf"].values[0, 0]))
+                                    added_mass_inf=float(c["added_mass_inf"].values[0, 0]))
             rows[f"coarse BEM (400 panels, 60 ω): {name}"] = scores(s, exp)
     print("| effect (changed alone) | 01D | 03D | 05D |\n|---|---|---|---|")
     for k, v in rows.items():
@@ -134,7 +135,7 @@ def main() -> None:
         te, ze = exp[d]
         s_exp = kh.decay_rate(te, ze, setup.te0)
         h0 = setup.drop_heights[d]
-        t, z = kh.integrate_decay(setup, h0, duration=4.0)
+        t, z = st.integrate_decay(setup, h0, duration=4.0)
         curves = {"experiment": (te, ze), "ours (physics)": (t, z / h0)}
         for code, path in kramer_numerical_files(d).items():
             num = read_kramer_numerical(path, require_uniform=False)

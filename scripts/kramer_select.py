@@ -1,6 +1,6 @@
 """Print the nested leave-one-out selection of the Kramer network's training length (issue 32).
 
-A thin caller of :func:`hybridwsi.report.kramer_hybrid.select_iterations`, which the study
+A thin caller of :func:`hybridwsi.surrogate.kramer.select_iterations`, which the study
 (``hybridwsi reproduce``) runs inside every fold: for held-out drop H, each of H's two training
 drops is trained alone and scored on the other every ``--every`` iterations, and the count with
 the lowest mean inner score is used for H. The single-drop runs are shared by the folds, as in
@@ -20,7 +20,7 @@ import numpy as np
 
 from hybridwsi.cli import Parser, run_script
 from hybridwsi.history import write_json
-from hybridwsi.report import kramer_hybrid as kh
+from hybridwsi.surrogate import kramer as kh
 
 
 def main() -> None:

@@ -1,6 +1,6 @@
 """Structured-residual variants on the Kramer decays: capacity and leave-one-out (issue 14).
 
-What limits the structured hybrid (``hybridwsi.report.kramer_hybrid``)? Two measurements:
+What limits the structured hybrid (``hybridwsi.surrogate.kramer``)? Two measurements:
 
 - *capacity*: each variant fitted (output error, as the report) on the 0.3D drop itself — a
   diagnostic of the model class, never used to choose the shipped model: if a class cannot
@@ -29,8 +29,9 @@ import numpy as np
 from hybridwsi.cli import run_script
 from hybridwsi.hydro import bem, coefficients
 from hybridwsi.importers.kramer import read_kramer_drop
-from hybridwsi.report import kramer_hybrid as kh
-from hybridwsi.report.kramer_hybrid import KramerSetup
+from hybridwsi.surrogate import kramer as kh
+from hybridwsi.surrogate import structured as st
+from hybridwsi.surrogate.kramer import KramerSetup
 
 #: heaves [m] at which A∞(z) is computed (the drops reach +0.15 m, the troughs −0.13 m) and
 #: the BEM resolution there (400 panels: A∞(0) within 0.6 % of the 6400-panel value)
@@ -90,7 +91,7 @@ def added_mass_table(setup: KramerSetup, heaves: Sequence[float] = ADDED_MASS_HE
                         water_depth=math.inf)
         values.append(float(coefficients.matrix(c, "added_mass_inf")[0, 0]))
     a = np.asarray(values)
-    a = a * setup.a_inf / float(np.interp(0.0, z, a))
+    a = a * setup.added_mass_inf / float(np.interp(0.0, z, a))
     # exact limit: a sphere touching the free surface from above has no added mass
     return AddedMassTable(np.r_[z, setup.body.radius], np.r_[a, 0.0], int(n_panels))
 
@@ -99,7 +100,7 @@ def score(setup: KramerSetup, curves: dict, drop: str, coef: np.ndarray, lead: f
           added_mass: AddedMassTable | None) -> float:
     """RMS of heave/H0 over [0, 5 Te0] of one drop (the decay table's), 1-ms RK4."""
     h0 = setup.drop_heights[drop]
-    t, z = kh.integrate_decay(setup, h0, coef, duration=4.0, dt=0.001, added_mass=added_mass)
+    t, z = st.integrate_decay(setup, h0, coef, duration=4.0, dt=0.001, added_mass=added_mass)
     return kh.decay_measures(t - lead, z / h0, setup, *curves[drop])["rms"]
 
 
@@ -110,17 +111,17 @@ def main() -> None:
     print("A_inf(z) [kg]:", dict(zip(np.round(table.z, 3).tolist(), np.round(table.a_inf, 3).tolist())))
     exp = {d: read_kramer_drop(d, normalised=True) for d in kh.DROPS}
     curves = {d: (exp[d]["time"].values, exp[d]["z"].values[:, 0]) for d in kh.DROPS}
-    zero = np.zeros(len(kh.STRUCTURED_TERMS))
+    zero = np.zeros(len(st.STRUCTURED_TERMS))
     print("physics + A_inf(z), no residual:",
           [round(score(setup, curves, d, zero, 0.0, table), 4) for d in kh.DROPS])
-    variants = {"V0": (kh.STRUCTURED_TERMS, None), "V1": (("b1", "b2", "k1", "k3"), table),
-                "V2": (kh.STRUCTURED_TERMS, table), "V3": (("b1", "b2", "k1"), table)}
+    variants = {"V0": (st.STRUCTURED_TERMS, None), "V1": (("b1", "b2", "k1", "k3"), table),
+                "V2": (st.STRUCTURED_TERMS, table), "V3": (("b1", "b2", "k1"), table)}
     fits = {"capacity (fitted on 03D)": ["03D"],
             **{f"held out {h}": [d for d in kh.DROPS if d != h] for h in kh.DROPS}}
     print("| variant | fit | 01D | 03D | 05D |\n|---|---|---|---|---|")
     for name, (free, am) in variants.items():
         for label, drops in fits.items():
-            coef, lead, _ = kh.fit_output_error(setup, {d: curves[d] for d in drops}, zero, free,
+            coef, lead, _ = st.fit_output_error(setup, {d: curves[d] for d in drops}, zero, free,
                                                 dt=kh.FIT_DT[False], fit_lead=True, added_mass=am)
             s = [score(setup, curves, d, coef, lead, am) for d in kh.DROPS]
             print(f"| {name} | {label} | " + " | ".join(f"{x:.4f}" for x in s) + " |", flush=True)

@@ -9,7 +9,7 @@ what is missing when started again.
     # the shipped file (cases/oc3_hywind.toml [bem]) and docs/figures/oc3_bem.{png,nc}
     python scripts/oc3_bem.py ship --jobs 1
 
-Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem.py).
+Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem/).
 """
 
 from __future__ import annotations

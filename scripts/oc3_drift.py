@@ -12,7 +12,7 @@ only what is missing when started again.
     # natural frequencies (docs/figures/oc3_drift_qtf.nc)
     nice -n 10 python scripts/oc3_drift.py qtf --panel-size 1.0 --mu 0.05 0.21
 
-Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (one process; see hydro/bem.py).
+Run with ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (one process; see hydro/bem/).
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ what is missing when started again.
     # the excitation between the stored headings (0, 30, 60°) against Capytaine every 7.5°
     python scripts/oc4_bem.py headings --panel-size 3
 
-Run with ``nice -n 10`` and ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem.py).
+Run with ``nice -n 10`` and ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` (see hydro/bem/).
 """
 
 from __future__ import annotations

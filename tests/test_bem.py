@@ -169,13 +169,13 @@ def test_excitation_long_wave_limit(tmp_path):
 # ------------------------------------------------------------------------- cache & resume
 def _counting(monkeypatch):
     solved: list[float] = []
-    real = bem._solve_chunk
+    real = bem.solve.solve_chunk
 
     def spy(solver, cbody, omegas, **kw):
         solved.extend(np.asarray(omegas).tolist())
         return real(solver, cbody, omegas, **kw)
 
-    monkeypatch.setattr(bem, "_solve_chunk", spy)
+    monkeypatch.setattr(bem.solve, "solve_chunk", spy)
     return solved
 
 
@@ -185,7 +185,7 @@ def test_cache_hit_solves_nothing(hulme_run, cache, monkeypatch):
     def boom(*a, **k):
         raise AssertionError("solved again despite the cache")
 
-    monkeypatch.setattr(bem, "_solve_chunk", boom)
+    monkeypatch.setattr(bem.solve, "solve_chunk", boom)
     again = bem.compute(FloatingSphere.paper(), ds["omega"].values, n_panels=TEST_PANELS,
                         cache_dir=cache, progress=False)
     xr.testing.assert_identical(again, ds)
@@ -198,7 +198,7 @@ def test_resume_solves_only_missing_frequencies(tmp_path, monkeypatch):
     solved = _counting(monkeypatch)
 
     # "interrupted" run: the third chunk raises; the first two must be checkpointed
-    real = bem._solve_chunk
+    real = bem.solve.solve_chunk
     calls = {"n": 0}
 
     def crash(*a, **k):
@@ -207,10 +207,10 @@ def test_resume_solves_only_missing_frequencies(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(*a, **k)
 
-    monkeypatch.setattr(bem, "_solve_chunk", crash)
+    monkeypatch.setattr(bem.solve, "solve_chunk", crash)
     with pytest.raises(KeyboardInterrupt):
         bem.compute(body, full, **kw)
-    monkeypatch.setattr(bem, "_solve_chunk", real)  # spy again, counting the resumed run
+    monkeypatch.setattr(bem.solve, "solve_chunk", real)  # spy again, counting the resumed run
     solved.clear()
     resumed = bem.compute(body, full, **kw)
     assert solved == [6.0, 8.0, 10.0, 0.0, math.inf]  # 2 and 4 were checkpointed
@@ -239,7 +239,7 @@ def test_corrupt_cache_file_is_recomputed(tmp_path):
 
 # ------------------------------------------------------------------------- validation
 def test_negative_damping_is_flagged(tmp_path, monkeypatch):
-    real = bem._solve_chunk
+    real = bem.solve.solve_chunk
 
     def corrupt(*a, **k):
         out = real(*a, **k)
@@ -247,7 +247,7 @@ def test_negative_damping_is_flagged(tmp_path, monkeypatch):
             out["radiation_damping"].loc[{"omega": 5.0}] = -1.0
         return out
 
-    monkeypatch.setattr(bem, "_solve_chunk", corrupt)
+    monkeypatch.setattr(bem.solve, "solve_chunk", corrupt)
     with pytest.warns(UserWarning, match="negative diagonal radiation damping"):
         ds = bem.compute(FloatingSphere.paper(), [3.0, 5.0], n_panels=400, cache_dir=tmp_path,
                          progress=False, use_cache=False)

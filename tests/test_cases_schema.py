@@ -22,7 +22,7 @@ from hybridwsi.cases import (
 from hybridwsi.cases.schema import CASE, Number, Table, iter_nodes
 from hybridwsi.cli import main
 from hybridwsi.errors import InputError
-from hybridwsi.history.units import convert_unit, parse_unit
+from hybridwsi.units import convert_unit, parse_unit
 
 OC3_TEXT = case_path("oc3_hywind").read_text()
 SPHERE_TEXT = """\

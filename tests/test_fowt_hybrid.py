@@ -19,7 +19,7 @@ from hybridwsi.cummins import build_system
 from hybridwsi.diagnostic import stability
 from hybridwsi.forces import MooringForce, MooringSystem
 from hybridwsi.hydro import coefficients as co
-from hybridwsi.report import fowt_diagnostic as fd
+from hybridwsi.surrogate import fowt as fd
 from hybridwsi.report import fowt, fowt_hybrid as fh
 from hybridwsi.casemodel import linear_components
 from hybridwsi.report.fowt import oc3_coefficients
@@ -134,7 +134,7 @@ def test_diagnostic_markdown_lists_every_partition(setup):
     diag = fd.diagnostic([setup["hist"]], *linear_components(
         setup["case"], DOFS, stiffness=MooringSystem.from_case(setup["case"]).stiffness()),
         setup["cfg"])
-    md = fd.diagnostic_markdown(diag)
+    md = fh.diagnostic_markdown(diag)
     for name in fd.RESIDUAL:
         assert f"| {name} |" in md
     json.dumps(fh.json_safe(diag))  # strict JSON

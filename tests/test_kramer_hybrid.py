@@ -1,4 +1,4 @@
-"""The hybrid on the Kramer decays (report/kramer_hybrid.py, issues 14 and 32).
+"""The hybrid on the Kramer decays (surrogate/kramer.py, issues 14 and 32).
 
 These tests check the *method*, never its held-out score against a published code's (the
 scores are a development score, issue 32): the physics integrators against the package's
@@ -22,7 +22,9 @@ import pytest
 
 from hybridwsi import cummins
 from hybridwsi.diagnostic import regress
-from hybridwsi.report import kramer_hybrid as kh
+from hybridwsi.surrogate import kramer as kh
+from hybridwsi.surrogate import multistep as ms
+from hybridwsi.surrogate import structured as st
 
 #: a small fold: the real pipeline at coarse steps and short trainings (about 10 s)
 SMOKE = kh.StudySettings(fit_dt=0.02, fit_max_nfev=6, eval_dt=0.005, max_iterations=2,
@@ -211,10 +213,10 @@ def test_fold_stability_predicted_as_observed(recorded_fold):
 def test_structured_stability_predicted_as_observed(setup, b1):
     """A negative damping smaller than the radiation damping (-5 N s/m) decays, a larger one
     (-40 N s/m) grows until the sphere leaves the water; the prediction says which."""
-    coef = np.zeros(len(kh.STRUCTURED_TERMS))
-    coef[kh.STRUCTURED_TERMS.index("b1")] = b1
-    model = kh.StructuredResidual(coef)
-    t, z = kh.integrate_decay(setup, setup.drop_heights["01D"], coef, duration=8.0, dt=0.002)
+    coef = np.zeros(len(st.STRUCTURED_TERMS))
+    coef[st.STRUCTURED_TERMS.index("b1")] = b1
+    model = st.StructuredResidual(coef)
+    t, z = st.integrate_decay(setup, setup.drop_heights["01D"], coef, duration=8.0, dt=0.002)
     observed = kh.decays(t, z, setup.te0)
     assert observed == (b1 > -20.0)
     assert bool(model.stability(setup).stable) == observed
@@ -260,7 +262,7 @@ def test_network_stability_predicted_as_observed(setup, measured, c):
 def test_physics_integrator_is_the_cummins_model(setup):
     """With no residual, the batched RK4 is cummins.simulate(nonlinear_hydrostatics=True)."""
     h0 = setup.drop_heights["03D"]
-    t, z = kh.integrate_decay(setup, h0, duration=1.0)
+    t, z = st.integrate_decay(setup, h0, duration=1.0)
     ref = cummins.simulate(setup.coeffs, mass=setup.mass, duration=1.0, dt=setup.dt, z0=h0,
                            nonlinear_hydrostatics=True, body=setup.body)
     assert np.max(np.abs(z - ref["z"].values[:, 0])) < 1e-6 * h0
@@ -271,9 +273,9 @@ def test_residual_pipeline_recovers_an_injected_damping(setup, measured):
     pipeline (estimated derivatives, sampled memory): the diagnostic finds β ≈ −0.6 N s/m."""
     like = measured["01D"]
     t = like["time"].values
-    coef = np.zeros(len(kh.STRUCTURED_TERMS))
-    coef[kh.STRUCTURED_TERMS.index("b1")] = 0.6
-    tb, zb = kh.integrate_decay(setup, setup.drop_heights["01D"], coef, duration=float(t[-1]))
+    coef = np.zeros(len(st.STRUCTURED_TERMS))
+    coef[st.STRUCTURED_TERMS.index("b1")] = 0.6
+    tb, zb = st.integrate_decay(setup, setup.drop_heights["01D"], coef, duration=float(t[-1]))
     hist = kh.training_slice(kh.residual_history(t, np.interp(t, tb, zb), setup, "01D"))
     fit = regress(hist, force="F_tot", known=setup.known(), fix_alpha=0.0)
     assert fit.beta[0, 0] == pytest.approx(-0.6, abs=0.2)
@@ -302,7 +304,7 @@ def test_torch_hybrid_with_zero_network_is_the_cummins_model(setup, measured):
                                z0=setup.drop_heights[d], nonlinear_hydrostatics=True,
                                body=setup.body) for d in kh.DROPS}
     for first in (0.0, 0.0073):
-        z = kh.torch_decays(net, setup, h0, 0.02, 50, first).detach().numpy()
+        z = ms.torch_decays(net, setup, h0, 0.02, 50, first).detach().numpy()
         t = np.r_[0.0, first + 0.02 * np.arange(51)] if first else 0.02 * np.arange(51)
         for k, d in enumerate(kh.DROPS):
             zr = np.interp(t, ref[d]["time"].values, ref[d]["z"].values[:, 0])
@@ -318,10 +320,10 @@ def test_heave_loss_places_the_lead_shifted_data_on_the_steps(setup, measured):
     targets = {}
     for d in ("01D", "05D"):
         te = measured[d]["time"].values
-        tb, zb = kh.integrate_decay(setup, setup.drop_heights[d], duration=4.0)
+        tb, zb = st.integrate_decay(setup, setup.drop_heights[d], duration=4.0)
         targets[d] = (te, np.interp(te + lead, tb, zb) / setup.drop_heights[d])
-    assert kh.HeaveLoss(setup, targets, lead).rms(net) < 2e-4
-    assert kh.HeaveLoss(setup, targets, 0.0).rms(net) > 5e-3
+    assert ms.HeaveLoss(setup, targets, lead).rms(net) < 2e-4
+    assert ms.HeaveLoss(setup, targets, 0.0).rms(net) > 5e-3
 
 
 def test_released_early_shifts_and_holds(setup):
@@ -375,7 +377,7 @@ def _entry(**rms):
 def test_report_text_follows_the_numbers_either_way():
     """The attribution sentence is generated from the numbers: a hybrid that beats LPF2 only
     through the lead is called so, and one that beats it under the same timing is not."""
-    from hybridwsi.report.kramer_report import lead_attribution
+    from hybridwsi.report.kramer_hybrid import lead_attribution
 
     text = lead_attribution("03D", _entry())
     network = text.split("*network*")[1]

@@ -130,7 +130,7 @@ def test_shipped_file_matches_the_case_configuration(shipped, tmp_path, monkeypa
     assert SHIPPED.stat().st_size < 5e6
     assert shipped.attrs["input_hash"] == bem.plan(**bem_arguments(CASE)).input_hash
     # compute() takes it without solving
-    monkeypatch.setattr(bem, "_solve_missing", lambda *a, **k: pytest.fail("solved"))
+    monkeypatch.setattr(bem.run, "solve_missing", lambda *a, **k: pytest.fail("solved"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds = bem.compute(**bem_arguments(CASE), cache_dir=tmp_path, progress=False)

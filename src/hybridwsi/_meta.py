@@ -10,6 +10,8 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
 
+from hybridwsi import __version__
+
 #: version string recorded for a package that is not installed
 NOT_INSTALLED = "unknown"
 
@@ -24,8 +26,6 @@ def package_version(name: str) -> str:
 
 def version() -> str:
     """hybridwsi's own version (``hybridwsi.__version__``; ``0.0.0+unknown`` from a bare tree)."""
-    from hybridwsi import __version__
-
     return __version__
 
 

@@ -80,7 +80,8 @@ from hybridwsi.history import TextTable, quantity_of, units_attrs
 from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.hydro.formats import read_coefficients
-from hybridwsi.hydro.statespace import RadiationSS
+from hybridwsi.hydro.irf import radiation_irf
+from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 from hybridwsi.hydro.strip import case_elements, with_slender_members
 from hybridwsi.importers import read_elevation
 from hybridwsi.waves import ElevationRecord, Wave, ramp_factor
@@ -252,9 +253,6 @@ def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
     fit_radiation_ss` with every DOF weighed alike), for multi-DOF kernels the default fit
     does not capture (the OC4 semi: docs/OC4_SEMI.md)."""
     if fit:
-        from hybridwsi.hydro.irf import radiation_irf
-        from hybridwsi.hydro.statespace import fit_radiation_ss
-
         kw = {k: fit[k] for k in ("t_max", "dt") if k in fit}
         kernel = radiation_irf(coeffs, **kw).sel(radiating_dof=list(dofs),
                                                  influenced_dof=list(dofs))
@@ -562,13 +560,18 @@ class CaseModel:
             ss = radiation_ss(coeffs, dofs, None, dt, case.get("radiation"))
         return cls(case, dofs, coeffs, model, table, dt, ss)
 
-    def radiation_ss_at(self, dt: float) -> RadiationSS:
-        """The radiation state space for the step ``dt`` [s]: the one built with the model
-        when it was built for that step (a fit costs seconds: OC3 3 DOFs ~4 s), else a fit
-        now (:func:`radiation_ss`, the case's ``[radiation]`` settings)."""
-        if self.radiation_ss is not None and self.dt is not None and math.isclose(self.dt, dt):
+    def state_space(self, dt: float) -> RadiationSS | None:
+        """The radiation state space of a run at ``dt`` [s]: the one built with the model
+        when fitted for that step, or when the case's ``[radiation]`` table fits it (its
+        kernel sampling is the table's, whatever the run's step: the same fit, ~20 s on the
+        OC4 semi, is not repeated); a new fit of that table otherwise; None (the run fits its
+        own) without the table."""
+        if self.radiation_ss is not None and (self.case.get("radiation") or (
+                self.dt is not None and math.isclose(self.dt, dt))):
             return self.radiation_ss
-        return radiation_ss(self.coeffs, self.dofs, None, dt, self.case.get("radiation"))
+        if self.case.get("radiation"):
+            return radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
+        return None
 
     @cached_property
     def body(self) -> Any:
@@ -710,10 +713,7 @@ class CaseModel:
         z0 = offset + np.broadcast_to(np.asarray(z0, dtype=float), (n,))
         nonlinear = forces["hydrostatics"] == "nonlinear"
         excite = wave if forces["excitation"] else None
-        ss = (self.radiation_ss if self.dt is not None and math.isclose(self.dt, dt)
-              and forces["radiation"] == "statespace" else None)
-        if ss is None and forces["radiation"] == "statespace" and self.case.get("radiation"):
-            ss = radiation_ss(self.coeffs, self.dofs, None, dt, self.case["radiation"])
+        ss = self.state_space(dt) if forces["radiation"] == "statespace" else None
         hist = cummins.simulate(
             self.coeffs, dofs=self.dofs, duration=duration, dt=dt, wave=excite, z0=z0,
             zdot0=zdot0, forces=list(comps.values()), radiation=forces["radiation"],

@@ -25,6 +25,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from typing import NoReturn
 
+from hybridwsi import __version__
 from hybridwsi.commands._options import missing_dependency, one_line
 from hybridwsi.errors import HybridWSIError
 
@@ -102,8 +103,6 @@ def _available() -> dict[str, str]:
 
 def build_parser(only: str | None = None) -> Parser:
     """The top-level parser; with ``only``, import just that command's module."""
-    from hybridwsi import __version__
-
     parser = Parser(
         prog="hybridwsi",
         description="Hybrid (physics + ML) solvers for floating bodies in waves: "

@@ -22,6 +22,7 @@ import numpy as np
 from hybridwsi.bodies.base import (HORIZONTAL_AND_HEAVE, Body, WaterplaneMoments,
                                    as_tuple_matrix, check_panel_count, disc_lid, inertia_matrix,
                                    positive, vector3)
+from hybridwsi.cases import load_case
 from hybridwsi.errors import InputError
 
 
@@ -97,8 +98,6 @@ class FloatingSphere(Body):
     def paper(cls) -> FloatingSphere:
         """The paper's sphere (``cases/paper_sphere.toml`` [body]: R = 0.15 m, m = 7.06 kg,
         half submerged, rho = 998.2, g = 9.81)."""
-        from hybridwsi.cases import load_case
-
         return cls.from_dict(load_case("paper_sphere")["body"])
 
     @classmethod

@@ -8,7 +8,7 @@ plain values in the units the schema states (:mod:`docs/CASES.md`):
 
 - a number may be written as a TOML number (in the key's unit) or as a string ``"value unit"``
   (``water_depth = "1050 ft"``, ``line1_heading = "0.5 rad"``), converted with
-  :func:`hybridwsi.history.units.convert_unit`; a unit of another quantity is refused;
+  :func:`hybridwsi.units.convert_unit`; a unit of another quantity is refused;
 - integers where the schema says integer, floats elsewhere (``320`` and ``320.0`` are one
   value, so they hash the same);
 - DOF names spelled as :func:`hybridwsi.dofs.check_dofs` spells them (``surge`` -> ``Surge``);
@@ -19,7 +19,7 @@ plain values in the units the schema states (:mod:`docs/CASES.md`):
   ``[forces]`` table always present and resolved (which component is on, which model).
 
 The schema is data (:class:`Table`, :class:`Number`, ...): one place to add a key. This module
-imports nothing above :mod:`hybridwsi.dofs` and :mod:`hybridwsi.history.units`.
+imports nothing above :mod:`hybridwsi.dofs` and :mod:`hybridwsi.units`.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from typing import Any
 
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, is_rotation
 from hybridwsi.errors import InputError
-from hybridwsi.history.units import convert_unit
+from hybridwsi.units import convert_unit
 
 #: marks an optional key without a default
 MISSING: Any = object()

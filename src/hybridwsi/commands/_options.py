@@ -21,7 +21,10 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from hybridwsi.dofs import check_dofs
 from hybridwsi.errors import InputError
+from hybridwsi.history import select_dofs
+from hybridwsi.importers import FORMATS, detect_format, read_history
 
 
 
@@ -109,8 +112,6 @@ positive_ints = _list(positive_int)
 
 def dof_names(text: str) -> tuple[str, ...]:
     """argparse type: comma-separated DOF names (:func:`hybridwsi.dofs.check_dofs`)."""
-    from hybridwsi.dofs import check_dofs
-
     try:
         return check_dofs(text)
     except InputError as exc:
@@ -267,8 +268,6 @@ def add_columns(p: argparse.ArgumentParser) -> None:
 
 def add_format(p: argparse.ArgumentParser) -> None:
     """``--format``: the input history format (default detected from the content)."""
-    from hybridwsi.importers import FORMATS
-
     p.add_argument("--format", default="auto", choices=("auto", *FORMATS),
                    help="input format (default: detected from the content)")
 
@@ -352,9 +351,6 @@ def read_dofs(path: str, dofs: Sequence[str] | None, *, format: str = "auto",
     For a plain CSV, ``dofs`` names the DOFs of its columns (the reader's ``dof``); for the
     formats that name their DOFs (NetCDF, DualSPHysics, Kramer) it selects a subset of them.
     """
-    from hybridwsi.history import select_dofs
-    from hybridwsi.importers import detect_format, read_history
-
     if dofs is None:
         return read_history(path, format=format, **options)
     fmt = detect_format(path) if format == "auto" else format

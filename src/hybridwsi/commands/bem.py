@@ -11,6 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridwsi.bodies import FloatingSphere, body_from_dict
+from hybridwsi.casemodel import bem_arguments
+from hybridwsi.cases import load_case
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import check_allocation
+from hybridwsi.dofs import coefficient_unit
+from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+from hybridwsi.history import read_text_file, to_netcdf
+from hybridwsi.hydro import bem
+from hybridwsi.hydro import coefficients as co
+
 HELP = "compute BEM coefficients (A, B, excitation, A_inf, C) of a floating body with Capytaine"
 DESCRIPTION = (
     "Solve the radiation/diffraction problems of a floating body with Capytaine (symmetric mesh "
@@ -32,8 +44,6 @@ PROBLEM_OPTIONS = ("body", *SPHERE_DEFAULTS, "panels", "panel_size", "dofs")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     o.add_case(parser, "its body and [bem] table; not combined with the body, frequency and "
                        "mesh options")
     parser.add_argument("--quick", action="store_true",
@@ -81,8 +91,6 @@ BYTES_PER_PANEL_PAIR = 2 * 16
 
 def check_panels(n_panels: int | None, workers: int | None) -> None:
     """Refuse a mesh whose dense BEM matrices cannot fit in memory (before meshing)."""
-    from hybridwsi.commands._options import check_allocation
-
     if n_panels is not None:
         check_allocation(BYTES_PER_PANEL_PAIR * float(n_panels) ** 2 * (workers or 1),
                          f"--panels {n_panels} (dense N x N influence matrices)",
@@ -91,11 +99,6 @@ def check_panels(n_panels: int | None, workers: int | None) -> None:
 
 def read_body(spec: str):
     """A body from a JSON file or JSON text (:func:`hybridwsi.bodies.body_from_dict`)."""
-    from hybridwsi.bodies import body_from_dict
-    from hybridwsi.errors import InputError
-
-    from hybridwsi.history import read_text_file
-
     path = Path(spec).expanduser()
     looks_like_json = spec.lstrip().startswith(("{", "["))
     text = spec if looks_like_json else read_text_file(path)
@@ -113,11 +116,6 @@ def read_body(spec: str):
 def problem(args: argparse.Namespace) -> dict:
     """Keyword arguments of :func:`hybridwsi.hydro.bem.compute` from the options: a case's
     (:func:`hybridwsi.casemodel.bem_arguments`) or the body/frequency options (paper defaults)."""
-    from hybridwsi.bodies import FloatingSphere
-    from hybridwsi.casemodel import bem_arguments
-    from hybridwsi.cases import load_case
-    from hybridwsi.errors import InputError
-
     if args.case is not None:
         clash = [f"--{k.replace('_', '-')}" for k in PROBLEM_OPTIONS
                  if getattr(args, k) is not None]
@@ -147,10 +145,6 @@ def problem(args: argparse.Namespace) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.files import check_output_path
-    from hybridwsi.history import to_netcdf
-    from hybridwsi.hydro import bem
-
     body_file = args.body if args.body and Path(args.body).expanduser().exists() else None
     case_file = args.case if args.case and Path(args.case).expanduser().is_file() else None
     check_output_path(args.out, [body_file, case_file])
@@ -168,9 +162,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_summary(ds, wall: float, out: str) -> None:
-    from hybridwsi.dofs import coefficient_unit
-    from hybridwsi.hydro import coefficients as co
-
     w = co.omega(ds)
     print(f"panels: {ds.attrs['n_panels']} (+{ds.attrs['n_lid_panels']} lid), "
           f"frequencies: {w.size} ({w[0]:.3g}-{w[-1]:.3g} rad/s)")

@@ -5,6 +5,13 @@ from __future__ import annotations
 import argparse
 import math
 
+from hybridwsi.commands import _options as o
+from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+from hybridwsi.history import to_netcdf
+from hybridwsi.hydro import coefficients as cf
+from hybridwsi.hydro.formats import CARRY_RHO_G, detect, read_coefficients, write_wamit
+
 HELP = "convert coefficient files: WAMIT .1/.3/.hst, BEMIO .h5, Capytaine NetCDF -> NetCDF, or -> WAMIT"
 DESCRIPTION = (
     "Read hydrodynamic coefficients a user already holds into hybridwsi's coefficient NetCDF "
@@ -16,8 +23,6 @@ DESCRIPTION = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     p.add_argument("input", metavar="INPUT",
                    help="coefficient file: ROOT.1 (WAMIT), FILE.h5 (BEMIO) or FILE.nc")
     o.add_out(p, "output: COEFFS.nc, or DIR/ROOT with --to wamit (writes ROOT.1, ROOT.3, "
@@ -49,8 +54,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse outputs that are inputs (a WAMIT input's siblings included) before reading."""
     from pathlib import Path
 
-    from hybridwsi.files import check_output_path
-
     src = Path(args.input)
     siblings = [src.with_suffix(sfx) for sfx in WAMIT_SUFFIXES] if src.suffix == ".1" else []
     inputs = [src, *(p for p in siblings if p.exists())]
@@ -63,11 +66,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.errors import InputError
-    from hybridwsi.history import to_netcdf
-    from hybridwsi.hydro import coefficients as cf
-    from hybridwsi.hydro.formats import CARRY_RHO_G, detect, read_coefficients, write_wamit
-
     _check_outputs(args)
     fmt = detect(args.input) if args.format == "auto" else args.format
     say = (lambda *a: None) if args.quiet else print

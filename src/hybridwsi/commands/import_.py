@@ -11,7 +11,11 @@ import argparse
 import warnings
 from pathlib import Path
 
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import read_dofs
 from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+from hybridwsi.history import estimate_derivatives, force_names, to_csv, to_netcdf
 
 HELP = "convert a force/motion file (CSV, DualSPHysics, Kramer 2021, NetCDF) to a TimeHistory"
 DESCRIPTION = (
@@ -22,8 +26,6 @@ DESCRIPTION = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     parser.add_argument("file", metavar="FILE", help="file to import")
     o.add_out(parser, "output TimeHistory (.nc NetCDF or .csv)", required=True,
               metavar="HISTORY")
@@ -50,10 +52,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.commands._options import read_dofs
-    from hybridwsi.files import check_output_path
-    from hybridwsi.history import estimate_derivatives, force_names, to_csv, to_netcdf
-
     out = Path(args.out)
     if out.suffix.lower() not in (".nc", ".csv"):
         raise InputError(f"--out must end in .nc (NetCDF) or .csv, got '{out.name}'")

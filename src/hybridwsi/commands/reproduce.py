@@ -6,6 +6,12 @@ import argparse
 import os
 from pathlib import Path
 
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import require
+from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+from hybridwsi.report.reproduce import run as reproduce
+
 HELP = "reproduce the paper (Table 1, Fig. 1, Fig. 2) into a results folder"
 DESCRIPTION = (
     "Runs BEM (Capytaine) → Cummins → regression/stability/reconstruction and the decay "
@@ -16,8 +22,6 @@ DESCRIPTION = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     o.add_out(p, "results folder (default: results)", default="results", metavar="DIR")
     p.add_argument("--quick", action="store_true", help="coarse BEM mesh, for tests and a first look")
     p.add_argument("--no-decay", action="store_true", help="skip the decay validation (Fig. 1)")
@@ -40,10 +44,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def check_inputs(args: argparse.Namespace) -> None:
     """Check the paths before anything runs; the SPH history's content is checked by
     :func:`hybridwsi.report.reproduce.run` before its first expensive step."""
-    from hybridwsi.commands._options import require
-    from hybridwsi.errors import InputError
-    from hybridwsi.files import check_output_path
-
     out = check_output_path(args.out, [args.sph_history], kind="dir")
     if args.sph_history is not None:
         src = Path(os.path.realpath(Path(args.sph_history).expanduser()))  # loops do not raise
@@ -55,8 +55,6 @@ def check_inputs(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.report.reproduce import run as reproduce
-
     check_inputs(args)
     reproduce(args.out, quick=args.quick, progress=not args.quiet, decay=not args.no_decay,
               hybrid=not args.no_hybrid, recompute_sph=args.recompute_sph,

@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import argparse
 
+from hybridwsi import __version__
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import read_dofs
+from hybridwsi.diagnostic.partition import select_partition, table_to_json
+from hybridwsi.files import check_output_path, write_json
+from hybridwsi.hydro.formats import read_coefficients
+
 HELP = "rank force partitions (known physics vs surrogate) by stability and reconstruction error"
 DESCRIPTION = (
     "For every combination of candidate known components (hydrostatics, A_inf, radiation "
@@ -14,8 +21,6 @@ DESCRIPTION = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     p.add_argument("file", help="TimeHistory NetCDF (e.g. from 'hybridwsi simulate')")
     o.add_coeffs(p, "of the history's DOFs or more (hydrostatic_stiffness, added_mass_inf, "
                  "radiation_damping, mass)")
@@ -36,11 +41,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from hybridwsi.commands._options import read_dofs
-    from hybridwsi.diagnostic.partition import select_partition, table_to_json
-    from hybridwsi.files import check_output_path, write_json
-    from hybridwsi.hydro.formats import read_coefficients
-
     if args.json:
         check_output_path(args.json, [args.file, args.coeffs])
     hist = read_dofs(args.file, args.dofs, format="netcdf")
@@ -56,8 +56,6 @@ def run(args: argparse.Namespace) -> int:
                                "display.max_colwidth", 60):
             print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     if args.json:
-        from hybridwsi import __version__
-
         doc = {"hybridwsi_version": __version__, "inputs": {"file": args.file,
                "coeffs": args.coeffs, "dofs": [str(d) for d in hist["dof"].values],
                "dt": table.attrs["dt"], "candidates": cands},

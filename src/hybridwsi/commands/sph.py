@@ -4,6 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import require
+from hybridwsi.files import check_output_path
+from hybridwsi.sph import tank
+from hybridwsi.sph.run import run_case
+
 
 HELP = ("run an SPH wave-tank case (PySPH): hydrostatic, dam_break, waves2d, waves3d, decay3d, "
         "regular3d")
@@ -16,8 +22,6 @@ CASES = ("hydrostatic", "dam_break", "waves2d", "waves3d", "decay2d", "decay3d",
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     parser.add_argument("case", choices=CASES, help="case to run")
     parser.add_argument("--dp", type=o.positive_float, default=None, metavar="M",
                         help="particle spacing [m]")
@@ -77,12 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.commands._options import require
-    from hybridwsi.files import check_output_path
-
     require("pysph")
-    from hybridwsi.sph import tank
-    from hybridwsi.sph.run import run_case
 
     out = args.out or f"sph_{args.case}.nc"
     check_output_path(out)

@@ -19,6 +19,7 @@ import xarray as xr
 from hybridwsi.errors import InputError
 from hybridwsi.forces import as_matrix
 from hybridwsi.hydro import coefficients
+from hybridwsi.hydro.irf import radiation_irf
 from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 
 RADIATION = ("statespace", "convolution", "none")
@@ -134,8 +135,6 @@ def _kernel(coeffs: xr.Dataset, dofs: list[str], irf: xr.DataArray | None,
             t_max: float | None, dt: float | None) -> xr.DataArray:
     """K(time, radiating_dof, influenced_dof) for ``dofs``, computed from B(ω) unless given."""
     if irf is None:
-        from hybridwsi.hydro.irf import radiation_irf
-
         kw: dict[str, Any] = {} if t_max is None else {"t_max": t_max}
         if dt is not None:
             kw["dt"] = dt

@@ -33,22 +33,20 @@ import xarray as xr
 
 from hybridwsi.dofs import RIGID_DOFS, check_dofs
 from hybridwsi.errors import InputError
+from hybridwsi.files import data_path, read_netcdf
 from hybridwsi.forces.base import KnownComponent
+from hybridwsi.hydro.drift import table_coefficients
 from hybridwsi.waves import Wave, components_within, harmonic_sum, ramp_factor
 
 def table_path(table: str | Path, folder: Path | None = None) -> Path:
     """Where a drift table named in a case lives: an absolute path, a path relative to
     ``folder`` (the case file's), or the name of a file shipped in ``hybridwsi/data``."""
-    from hybridwsi.files import data_path
-
     return data_path(table, folder, "drift table")
 
 
 def load_table(table: str | Path | xr.Dataset, folder: Path | None = None) -> xr.Dataset:
     """A drift table (:func:`hybridwsi.hydro.drift.drift_table`): a Dataset, or a file found by
     :func:`table_path` (``"drift_oc3_hywind.nc"`` is shipped)."""
-    from hybridwsi.files import read_netcdf
-
     if isinstance(table, xr.Dataset):
         return table
     return read_netcdf(table_path(table, folder))
@@ -112,8 +110,6 @@ class SlowDriftForce(KnownComponent):
         ``dofs`` default to the case's ``default_dofs``; the wave's direction picks the table's
         heading.
         """
-        from hybridwsi.hydro.drift import table_coefficients
-
         cfg = case.get("drift") if isinstance(case, Mapping) else None
         if table is None and not (isinstance(cfg, Mapping) and "table" in cfg):
             raise InputError("case has no [drift] table")

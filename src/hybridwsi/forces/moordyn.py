@@ -49,8 +49,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import package_version
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError, SolverError
+from hybridwsi.files import write_json
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.mooring import rotation_matrix
 
@@ -404,8 +406,6 @@ def statics_cache_dir() -> Path:
 def statics_key(text: str, what: str, step: float) -> str:
     """Cache key of a static solution: the input text, ``what`` ("rest", "stiffness"), the
     finite-difference step [m], the moordyn version and :data:`_STATICS_VERSION`."""
-    from hybridwsi._meta import package_version
-
     return what + "-" + hashlib.sha1(json.dumps(
         {"text": text, "what": what, "step": float(step), "version": _STATICS_VERSION,
          "moordyn": package_version("moordyn")}).encode()).hexdigest()
@@ -425,8 +425,6 @@ def _cached(text: str, what: str, step: float, compute: Any, use_cache: bool = T
     """``compute()`` (a dict of arrays) looked up in memory, the disk cache
     (:func:`statics_cache_dir`) and the shipped solutions, else computed and cached
     (``use_cache`` False: computed, nothing read or written)."""
-    from hybridwsi.files import write_json
-
     if not use_cache:
         return compute()
     key = statics_key(text, what, step)

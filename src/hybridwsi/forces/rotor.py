@@ -62,8 +62,10 @@ import xarray as xr
 
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError, SolverError
+from hybridwsi.files import DATA, data_path, read_netcdf
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.controller import PI_GAINS, THETA_K, PitchPI, TorqueLaw
+from hybridwsi.forces.mooring import bicubic_patches
 from hybridwsi.wind import SteadyWind, TurbulentWind, number
 
 #: rotor states of a case's ``[rotor]`` table
@@ -218,15 +220,11 @@ class RotorTable:
     @classmethod
     def from_file(cls, path: str | Path) -> RotorTable:
         """Read a table written by ``scripts/rotor_table.py`` (InputError when unreadable)."""
-        from hybridwsi.files import read_netcdf
-
         return cls(read_netcdf(path), source=str(path))
 
     @classmethod
     def nrel_5mw(cls) -> RotorTable:
         """The shipped NREL 5-MW table (``hybridwsi/data/rotor_nrel5mw.nc``)."""
-        from hybridwsi.files import DATA
-
         return cls.from_file(DATA / DEFAULT_TABLE)
 
     @property
@@ -410,8 +408,6 @@ class RotorAerodynamics:
     """
 
     def __init__(self, table: RotorTable) -> None:
-        from hybridwsi.forces.mooring import bicubic_patches
-
         data = table.data
         for name in ("thrust_coefficient_surface", "torque_coefficient_surface"):
             if name not in data or data[name].dims != ("tsr", "pitch"):
@@ -716,8 +712,6 @@ def wind_from_case(table: Mapping[str, Any], hub_height: float) -> SteadyWind | 
 def _table_path(table: Mapping[str, Any], case_dir: str | Path | None) -> Path:
     """``[rotor] table``: a file shipped in ``hybridwsi/data`` or a path relative to the case
     file's folder (default: the shipped NREL 5-MW table)."""
-    from hybridwsi.files import data_path
-
     return data_path(table.get("table", DEFAULT_TABLE),
                      Path(case_dir) if case_dir is not None else None, "rotor table")
 

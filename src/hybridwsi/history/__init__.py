@@ -9,13 +9,14 @@ force components, optional ``mass``; units per DOF). The package is split along 
   that may be pooled) and :func:`check_regressors` (data a fit can use);
 - :mod:`~hybridwsi.files`: atomic writers (:func:`atomic_write`, :func:`write_json`,
   :func:`write_text`) and the NetCDF round trip (:func:`to_netcdf`, :func:`read_netcdf`);
-- :mod:`~hybridwsi.history.units`: the one unit table (:data:`UNIT_FACTORS`,
+- :mod:`~hybridwsi.units`: the one unit table (:data:`UNIT_FACTORS`,
   :func:`unit_factor`) and :func:`to_si` (a whole history in SI, unknown units refused);
 - :mod:`~hybridwsi.history.text`: text tables with units in their headers
   (:class:`TextTable`, :func:`read_csv`, :func:`to_csv`);
 - :mod:`~hybridwsi.history.signal`: derivative estimation, resampling and the crossing
   analysis (:func:`estimate_derivatives`, :func:`resample`, :func:`finalize_import`,
-  :func:`crossing_periods`).
+  :func:`crossing_periods`) and the error measures of records against a reference
+  (:func:`rms_heave_error`, :func:`nrms_percent`).
 
 Reading any supported file format (the dispatcher ``read_history``) lives one layer up, in
 :mod:`hybridwsi.importers`, which builds on this package; this package never imports it.
@@ -51,13 +52,16 @@ from hybridwsi.history.model import (
     validate,
 )
 from hybridwsi.history.signal import (
+    crossing_period,
     crossing_periods,
     crossings,
     estimate_derivatives,
     finalize_import,
     fit_damped_oscillator,
     mean_crossing_period,
+    nrms_percent,
     resample,
+    rms_heave_error,
     savgol_window,
 )
 from hybridwsi.history.text import (
@@ -68,7 +72,7 @@ from hybridwsi.history.text import (
     split_header,
     to_csv,
 )
-from hybridwsi.history.units import (
+from hybridwsi.units import (
     SI_UNITS,
     UNIT_FACTORS,
     check_si,
@@ -92,6 +96,7 @@ __all__ = [
     "check_mass",
     "check_regressors",
     "check_si",
+    "crossing_period",
     "crossing_periods",
     "crossings",
     "detect_separator",
@@ -104,12 +109,14 @@ __all__ = [
     "mass_matrix",
     "select_dofs",
     "mean_crossing_period",
+    "nrms_percent",
     "normalise_unit",
     "quantity_of",
     "read_csv",
     "read_netcdf",
     "read_text_file",
     "resample",
+    "rms_heave_error",
     "savgol_window",
     "set_mass",
     "split_header",

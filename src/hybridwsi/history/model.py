@@ -34,7 +34,7 @@ import xarray as xr
 from hybridwsi import dofs as _dofs
 from hybridwsi._meta import version
 from hybridwsi.errors import InputError
-from hybridwsi.history.units import check_si
+from hybridwsi.units import check_si
 from hybridwsi.hydro.coefficients import pair_units_attr
 
 KINEMATICS = ("z", "zdot", "zddot")
@@ -250,7 +250,7 @@ def validate(
     ``UNIFORM_RTOL`` (unless ``require_uniform=False``), at least ``min_samples`` samples;
     ``z`` present (unless ``require_z=False``, for acceleration-only imports); every kinematic
     and force variable finite (no NaN/inf) and shaped ``(time, dof)``; units SI
-    (:func:`hybridwsi.history.units.check_si`: a file read without conversion is refused, not
+    (:func:`hybridwsi.units.check_si`: a file read without conversion is refused, not
     used at the wrong scale); ``mass``, when present, finite and positive definite.
     """
     if not isinstance(ds, xr.Dataset):

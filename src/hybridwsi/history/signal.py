@@ -11,6 +11,9 @@
   record's mean, right for steady oscillations).
 - :func:`fit_damped_oscillator`: damped period, damping ratio and equilibrium of a decay
   record (free-decay validation: Kramer drops, SPH decays).
+- :func:`rms_heave_error` and :func:`crossing_period`: the decay table's error measure and
+  period of a record normalised by its drop height (the Kramer validation and hybrid);
+  :func:`nrms_percent`: a rollout's RMS error per DOF in % of the reference's RMS.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import xarray as xr
 
 from hybridwsi.errors import InputError
 from hybridwsi.history.model import check_regressors, is_uniform, time_step, units_attrs, validate
-from hybridwsi.history.units import to_si
+from hybridwsi.units import to_si
 
 # --------------------------------------------------------------------------------------------
 # Derivative estimation
@@ -247,7 +250,7 @@ def finalize_import(
     """Convert a freshly imported history to SI and validate it; resample it first when asked
     and irregular.
 
-    Used by every ``read_*`` function so that units (:func:`hybridwsi.history.units.to_si`:
+    Used by every ``read_*`` function so that units (:func:`hybridwsi.units.to_si`:
     NetCDF ``units`` attributes honoured, unknown ones refused) and irregular sampling are
     handled the same way: irregular sampling is rejected with a clear message unless
     ``resample_to_uniform`` (or ``require_uniform=False``).
@@ -380,3 +383,67 @@ def fit_damped_oscillator(t: np.ndarray, z: np.ndarray, period_guess: float,
     return {"period_d": float(2 * np.pi / w), "sigma": float(sig),
             "zeta": float(sig / np.hypot(sig, w)), "z_eq": float(c), "amplitude": float(a),
             "rms": float(np.sqrt(np.mean(res(np.array([a, sig, w, _, c])) ** 2)))}
+
+
+# --------------------------------------------------------------------------------------------
+# Error measures of model records against a reference
+# --------------------------------------------------------------------------------------------
+
+def rms_heave_error(
+    t_model: np.ndarray,
+    zn_model: np.ndarray,
+    t_exp: np.ndarray,
+    zn_exp: np.ndarray,
+    te0: float,
+    window: tuple[float, float] = (0.0, 5.0),
+) -> float:
+    """RMS of normalised heave error over ``t/Te0 ∈ window`` on the experiment's grid.
+
+    Parameters
+    ----------
+    t_model, zn_model : ndarray
+        Model time [s] (increasing) and heave / H0 [-].
+    t_exp, zn_exp : ndarray
+        Experiment time [s] and mean heave / H0 [-].
+    te0 : float
+        Normalisation period [s].
+    window : (float, float)
+        Window in units of ``te0``.
+
+    Returns
+    -------
+    float
+        RMS error [-].
+    """
+    t_model = np.asarray(t_model, float)
+    lo, hi = window[0] * te0, window[1] * te0
+    sel = (t_exp >= lo - 1e-12) & (t_exp <= hi + 1e-12)
+    if t_model[0] > lo + 1e-9 or t_model[-1] < hi - 1e-9:
+        raise InputError(
+            f"model record [{t_model[0]:.3f}, {t_model[-1]:.3f}] s does not cover the RMS window "
+            f"[{lo:.3f}, {hi:.3f}] s"
+        )
+    zi = np.interp(t_exp[sel], t_model, zn_model)
+    return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
+
+
+def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
+    """Mean crossing period of a decay record over ``window`` (same unit as ``t``).
+
+    Every record here (experiment, published codes, our models) is heave measured from its
+    equilibrium, so the crossings are those of z = 0; the first half cycle, which depends on
+    the release, is skipped (:func:`hybridwsi.history.mean_crossing_period`).
+    """
+    return mean_crossing_period(t, z, window, z_eq=0.0, skip=1)
+
+
+def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
+    """RMS of (hybrid − reference) z per DOF over the hybrid's times, in % of the reference's
+    RMS z on those times (inf when the hybrid is not finite)."""
+    t = hist["time"].values
+    z_ref = ref["z"].sel(time=t, method="nearest").values
+    z = hist["z"].values
+    if not np.all(np.isfinite(z)):
+        return [float("inf")] * z.shape[1]
+    err = np.sqrt(np.mean((z - z_ref) ** 2, axis=0))
+    return (100.0 * err / np.sqrt(np.mean(z_ref ** 2, axis=0))).tolist()

@@ -25,7 +25,7 @@ from hybridwsi.errors import InputError
 from hybridwsi.files import NETCDF_MAGIC, atomic_write
 from hybridwsi.history.model import make_history, units_per_dof
 from hybridwsi.history.signal import finalize_import
-from hybridwsi.history.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
+from hybridwsi.units import UNIT_FACTORS, normalise_unit, quantity_of, unit_factor
 
 @lru_cache(maxsize=65536)
 def split_header(header: str) -> tuple[str, str | None]:
@@ -533,20 +533,37 @@ def read_csv(
     """
     table = TextTable(path, sep, lazy=True)
     dof_names = list(_dofs.check_dofs(dof if dof is not None else table.meta.get("dof", "Heave")))
-    cols: dict[str, list[str]] = {"time": [table.require(time, "time column")]}
-    for role, given in (("z", z), ("zdot", zdot), ("zddot", zddot)):
-        if given is not None:
-            cols[role] = _dof_columns(table, given, dof_names, f"{role} column")
-        elif role != "z":
-            found = _dof_columns(table, role, dof_names)
-            if found is not None:
-                cols[role] = found
+    cols = _kinematic_columns(table, dof_names, time=time, z=z, zdot=zdot, zddot=zddot)
     eta_col = table.require(eta, "wave-elevation column") if eta is not None else table.find("eta")
     used = {c for cs in cols.values() for c in cs} | ({eta_col} if eta_col else set())
     named = _named_force_columns(table, forces, dof_names)
     # only the columns asked for are parsed (all of them when the forces are not named)
     table.load(table.columns if named is None else [*used, *(c for cs in named.values() for c in cs)])
     extra_vars, extra_coords = _eta_variable(table, eta_col)
+    t, kin, force_cols, force_data, extra_cols, ignored = _read_history_columns(
+        table, cols, used, named, dof_names)
+    ds = make_history(
+        t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names,
+        mass=_meta_mass(table) if mass is None else mass,
+        source=table.meta.get("source", f"csv:{table.path.name}"),
+        inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
+                "sep": table.sep, **({"eta": eta_col} if eta_col else {}),
+                **({"ignored_columns": ignored} if ignored else {})},
+        check=False, extra_vars=extra_vars, extra_coords=extra_coords,
+    )
+    _add_extra_columns(ds, table, extra_cols)
+    ds = finalize_import(ds, resample_to_uniform=resample, require_z=z is not None)
+    if named is not None and ignored:  # said once the file is read (never before an error)
+        warnings.warn(f"{table.path.name}: {ignored} of {len(table.columns)} columns ignored "
+                      "(not the time, motion or named force columns)", UserWarning, stacklevel=2)
+    return ds
+
+
+def _read_history_columns(table: TextTable, cols: dict[str, list[str]], used: set[str],
+                          named: dict[str, list[str]] | None, dof_names: list[str]) -> tuple:
+    """Time [s], motion per role and forces per variable in SI, the force and extra columns
+    (every unused numeric one when the forces are not ``named``) and the count of columns
+    not read."""
     t = table.numeric(cols["time"][0], "time")
     table.check_time(t)
     kin = {r: _read_dofs(table, c, r, dof_names) for r, c in cols.items() if r != "time"}
@@ -555,16 +572,28 @@ def read_csv(
     ignored = len(table.columns) - len(used | {c for cs in force_cols.values() for c in cs}
                                        | {c for cs in extra_cols.values() for c in cs})
     force_data = {v: _read_dofs(table, c, "force", dof_names) for v, c in force_cols.items()}
-    if mass is None:
-        mass = _meta_mass(table)
-    ds = make_history(
-        t, kin.get("z"), kin.get("zdot"), kin.get("zddot"), force_data, dof=dof_names, mass=mass,
-        source=table.meta.get("source", f"csv:{table.path.name}"),
-        inputs={"file": str(table.path), "columns": _flat({**cols, **force_cols}),
-                "sep": table.sep, **({"eta": eta_col} if eta_col else {}),
-                **({"ignored_columns": ignored} if ignored else {})},
-        check=False, extra_vars=extra_vars, extra_coords=extra_coords,
-    )
+    return t, kin, force_cols, force_data, extra_cols, ignored
+
+
+def _kinematic_columns(table: TextTable, dof_names: list[str], **given: str | None
+                       ) -> dict[str, list[str]]:
+    """The header cells of ``time`` and of the motion per DOF (``z``, ``zdot``, ``zddot``:
+    a name given must be there; an unnamed derivative is taken when a column has its name)."""
+    cols: dict[str, list[str]] = {"time": [table.require(given["time"], "time column")]}
+    for role in ("z", "zdot", "zddot"):
+        if given[role] is not None:
+            cols[role] = _dof_columns(table, given[role], dof_names, f"{role} column")
+        elif role != "z":
+            found = _dof_columns(table, role, dof_names)
+            if found is not None:
+                cols[role] = found
+    return cols
+
+
+def _add_extra_columns(ds: xr.Dataset, table: TextTable, extra_cols: dict[str, list[str]]
+                       ) -> None:
+    """The extra ``(time, dof)`` variables (columns of known non-force units) with their units,
+    and the ``estimated`` notes of derivatives written by :func:`to_csv`, in place."""
     for var, cs in extra_cols.items():
         units = [split_header(c)[1] or "" for c in cs]
         ds[var] = (("time", "dof"), np.column_stack([table.numeric(c) for c in cs]),
@@ -573,11 +602,6 @@ def read_csv(
         note = table.meta.get(f"estimated.{role}")
         if note and role in ds:
             ds[role].attrs["estimated"] = note
-    ds = finalize_import(ds, resample_to_uniform=resample, require_z=z is not None)
-    if named is not None and ignored:  # said once the file is read (never before an error)
-        warnings.warn(f"{table.path.name}: {ignored} of {len(table.columns)} columns ignored "
-                      "(not the time, motion or named force columns)", UserWarning, stacklevel=2)
-    return ds
 
 
 def _eta_variable(table: TextTable, column: str | None) -> tuple[dict | None, dict | None]:

@@ -54,13 +54,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from hybridwsi._meta import provenance
+from hybridwsi.dofs import check_dofs
 from hybridwsi.errors import InputError, SolverError
+from hybridwsi.files import read_netcdf, to_netcdf
 from hybridwsi.hydro import coefficients as co
+from hybridwsi.hydro.bem.cache import default_cache_dir
+from hybridwsi.hydro.bem.planning import json_sha256
+from hybridwsi.hydro.bem.solve import blas_single_thread, quiet_capytaine
+from hybridwsi.waves import dispersion_k
 
 #: the six generalised force components (influenced DOFs) of the near field
 ALL_DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
@@ -180,8 +188,6 @@ def _check_settings(omega: Any, wave_directions: Any, water_depth: Any, n_theta:
 
 def _solve_depth(w: float, depth: float, g: float, deep_kh: float | None) -> float:
     """The depth [m] a frequency is solved in: ``inf`` where k h ≥ ``deep_kh``."""
-    from hybridwsi.waves import dispersion_k
-
     if not math.isfinite(depth) or deep_kh is None:
         return depth
     return math.inf if float(dispersion_k(w, depth, g)) * depth >= deep_kh else depth
@@ -317,11 +323,9 @@ def _solve_results(solver: Any, cbody: Any, geom: dict[str, Any], w: float, dept
     their hull and waterline fields (:func:`_fields`) at one frequency."""
     import capytaine as cpt
 
-    from hybridwsi.hydro.bem import _quiet_capytaine, blas_single_thread
-
     names, _, _ = _dof_vectors(cbody)
     common = dict(body=cbody, omega=w, water_depth=depth, rho=rho, g=g)
-    with blas_single_thread(), _quiet_capytaine():  # e.g. "no dofs" for a fixed body
+    with blas_single_thread(), quiet_capytaine():  # e.g. "no dofs" for a fixed body
         problems = [cpt.DiffractionProblem(wave_direction=float(b), **common) for b in directions]
         problems += [cpt.RadiationProblem(radiating_dof=d, **common) for d in names]
         results = solver.solve_all(problems, keep_details=True, progress_bar=False)
@@ -697,12 +701,6 @@ def compute_operator(body: Any, omega: Sequence[float] | np.ndarray, *, water_de
     frequencies solves only the new ones. ``attrs["input_hash"]`` is the key.
     """
     import json
-    from pathlib import Path
-
-    from hybridwsi._meta import provenance
-    from hybridwsi.files import read_netcdf, to_netcdf
-    from hybridwsi.hydro.bem import _sha256, default_cache_dir
-
     dofs = list(ALL_DOFS)
     mesh = body.mesh_options(panel_size=panel_size)
     config = {"body": body.to_dict(), "mesh": body.mesh_description(**mesh),
@@ -710,7 +708,7 @@ def compute_operator(body: Any, omega: Sequence[float] | np.ndarray, *, water_de
               "wave_directions": [float(b) for b in wave_directions], "n_theta": int(n_theta),
               "deep_water_kh": deep_water_kh, "dofs": dofs, "method": "indirect",
               "versions": provenance("capytaine")}
-    key = _sha256(config)
+    key = json_sha256(config)
     root = (Path(cache_dir).expanduser() if cache_dir is not None
             else default_cache_dir().parent) / "drift"
     store = root / f"operator_{key[:24]}.nc"
@@ -766,8 +764,6 @@ def table_coefficients(table: xr.Dataset, dofs: Sequence[str], *, direction: flo
     ``field``: ``"far_field"``, ``"near_field"`` or ``"combined"`` (far field where it is
     defined, i.e. surge, sway and yaw, near field for heave, roll and pitch).
     """
-    from hybridwsi.dofs import check_dofs
-
     if field not in ("far_field", "near_field", "combined"):
         raise InputError(f"drift field must be far_field, near_field or combined, got {field!r}")
     for name in ("far_field", "near_field"):

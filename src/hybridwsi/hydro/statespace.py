@@ -310,8 +310,7 @@ def fit_radiation_ss(
     max_order : int
         Largest order tried by the automatic selection.
     tol : float
-        Target fit error of the impulse response (0.01 = 1 %): the worst DOF pair's RMS error
-        relative to the geometric mean of its two diagonal kernels' RMS (module docstring).
+        Target fit error of the impulse response (0.01 = 1 %; worst DOF pair, module docstring).
     method : {"hankel"}
         Only ERA/Hankel-SVD is implemented.
     dt : float, optional
@@ -320,55 +319,102 @@ def fit_radiation_ss(
         BEM coefficients; when given, ``fit_error["frequency_bem"]`` compares ``Re K̂(ω)``
         with their ``radiation_damping`` B(ω).
     balance : bool, optional
-        Fit ``K_ij / (s_i s_j)`` with ``s_i = sqrt(max_t |K_ii|)`` (every diagonal kernel of
-        peak 1) and scale the realisation back (``B`` by ``s_rad``, ``C`` by ``s_inf``): the
-        joint fit then weighs every DOF alike instead of the largest entries (N m s/rad of a
-        rotation against N s/m of a translation). A congruence, so passivity is unchanged.
-        ``None`` (default): balance whenever the same DOFs radiate and are influenced;
-        ``True`` requires that; ``False`` fits K in SI units.
+        Fit ``K_ij / (s_i s_j)``, every DOF weighed alike (:func:`_dof_scales`). ``None``
+        (default): whenever the same DOFs radiate and are influenced; ``True`` requires that;
+        ``False`` fits K in SI units.
     low_frequency : {"auto", "zero", "free"}
-        ``"zero"`` imposes ``K̂(0) = B(0) = 0`` exactly (a radiation kernel: the damping of a
-        floating body vanishes at zero frequency); ``"free"`` leaves ``K̂(0)`` to the fit
-        (a kernel with ``∫K dt ≠ 0``, e.g. a closed form that is not a radiation kernel);
-        ``"auto"``: ``"zero"`` unless the kernel's own ``|∫K_ii dt|`` exceeds ``DC_AUTO`` (5 %)
-        of ``∫|K_ii| dt`` for some DOF (``radiation_irf`` kernels are at most 4 % for the
-        shipped bodies, the truncation; B sampled from a nonzero B(0) gives more). The choice
-        is recorded in ``RadiationSS.low_frequency``.
+        ``"zero"`` imposes ``K̂(0) = B(0) = 0`` exactly, ``"free"`` leaves it to the fit,
+        ``"auto"`` decides from the kernel (:func:`_low_frequency_mode`); recorded in
+        ``RadiationSS.low_frequency``.
     passive : bool
         Enforce passivity, ``Re K̂(iω)`` (its Hermitian part) positive semi-definite at every
         ω, by a least perturbation of ``C`` (module docstring).
     max_pole : float, optional
-        Largest pole magnitude ``|λ|`` [1/s] accepted: orders with a faster pole are skipped
-        (an explicit integrator with step Δt needs ``|λ| Δt`` ≲ 2, RK4; ``cummins`` passes
-        ``2/Δt`` when it fits the model itself).
+        Largest pole magnitude ``|λ|`` [1/s] accepted (faster orders skipped): RK4 with step
+        Δt needs ``|λ| Δt`` ≲ 2; ``cummins`` passes ``2/Δt`` when it fits the model itself.
 
     Returns
     -------
     RadiationSS
     """
-    if method != "hankel":
-        raise InputError(f"unknown state-space fitting method '{method}' (use 'hankel')")
-    if not 0 < tol < 1:
-        raise InputError(f"tol must be in (0, 1), got {tol}")
-    if low_frequency not in LOW_FREQUENCY:
-        raise InputError(f"low_frequency must be one of {', '.join(LOW_FREQUENCY)}, "
-                         f"got {low_frequency!r}")
+    _check_fit_options(method, tol)
     arr, dt0, rad, inf = _kernel_array(K, dt)
-    dc = _dc_ratio(arr, dt0)
-    if low_frequency == "auto":
-        low_frequency = "zero" if dc <= DC_AUTO else "free"
-    elif low_frequency == "zero" and dc > DC_AUTO:
-        warnings.warn(f"radiation state space: the kernel has ∫K dt = B(0) ≠ 0 ({dc:.0%} of "
-                      "∫|K| dt) but low_frequency='zero' imposes B(0) = 0", stacklevel=2)
+    low_frequency = _low_frequency_mode(arr, dt0, low_frequency)
     s_rad, s_inf = _dof_scales(arr, rad, inf, balance)
     # scaled Markov parameters (output force, input velocity): every DOF pair weighs alike
     markov = (arr / np.outer(s_rad, s_inf)[None]).transpose(0, 2, 1)
     nt, p, m = markov.shape
     t_all = np.arange(nt) * dt0
+    u, sv, vt, h1, dth, candidates = _hankel_svd(markov, dt0, order, max_order)
+
+    def fit_n(n: int) -> _Fit | None:
+        fit = _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency)
+        too_fast = max_pole is not None and fit is not None and \
+            np.abs(np.linalg.eigvals(fit.a)).max() > max_pole
+        return None if too_fast else fit
+
+    best = _select_order(fit_n, candidates, tol, markov, passive, fixed=order is not None)
+    if best is None:
+        raise InputError("no stable state-space realisation found for K; check the kernel")
+    ss = RadiationSS(A=best.a, B=best.b * s_rad[None], C=s_inf[:, None] * best.c,
+                     D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
+                     n_reflected=best.n_reflected,
+                     converged=best.error < tol or order is not None,
+                     dt_fit=dth, low_frequency=low_frequency, passivity_min=best.passivity)
+    ss.fit_error = _fit_errors(ss, arr, dt0, best.error, coeffs)
+    _warn_fit(ss, best.error, tol, passive)
+    return ss
+
+
+def _check_fit_options(method: str, tol: float) -> None:
+    """:class:`InputError` for an unknown method or a tolerance outside (0, 1)."""
+    if method != "hankel":
+        raise InputError(f"unknown state-space fitting method '{method}' (use 'hankel')")
+    if not 0 < tol < 1:
+        raise InputError(f"tol must be in (0, 1), got {tol}")
+
+
+def _warn_fit(ss: RadiationSS, err: float, tol: float, passive: bool) -> None:
+    """Warn when the fit did not reach ``tol`` or (``passive``) passivity."""
+    if not ss.converged:
+        warnings.warn(f"radiation state space: order {ss.order} reaches a fit error of "
+                      f"{err:.3g} > tol={tol}", stacklevel=3)
+    if passive and ss.passivity_min < -PASSIVITY_TOL:
+        warnings.warn(f"radiation state space: passivity not reached (smallest relative "
+                      f"eigenvalue of Re K̂(iω) {ss.passivity_min:.3g})", stacklevel=3)
+
+
+def _low_frequency_mode(arr: np.ndarray, dt: float, low_frequency: str) -> str:
+    """``"zero"`` or ``"free"``, the low-frequency constraint of :func:`fit_radiation_ss`.
+
+    ``"zero"`` imposes ``K̂(0) = B(0) = 0`` exactly (a radiation kernel: the damping of a
+    floating body vanishes at zero frequency); ``"free"`` leaves ``K̂(0)`` to the fit (a kernel
+    with ``∫K dt ≠ 0``, e.g. a closed form that is not a radiation kernel); ``"auto"``:
+    ``"zero"`` unless the kernel's own ``|∫K_ii dt|`` exceeds ``DC_AUTO`` (5 %) of
+    ``∫|K_ii| dt`` for some DOF (``radiation_irf`` kernels are at most 4 % for the shipped
+    bodies, the truncation; B sampled from a nonzero B(0) gives more). A ``"zero"`` imposed
+    on a kernel with B(0) ≠ 0 is warned.
+    """
+    if low_frequency not in LOW_FREQUENCY:
+        raise InputError(f"low_frequency must be one of {', '.join(LOW_FREQUENCY)}, "
+                         f"got {low_frequency!r}")
+    dc = _dc_ratio(arr, dt)
+    if low_frequency == "auto":
+        return "zero" if dc <= DC_AUTO else "free"
+    if low_frequency == "zero" and dc > DC_AUTO:
+        warnings.warn(f"radiation state space: the kernel has ∫K dt = B(0) ≠ 0 ({dc:.0%} of "
+                      "∫|K| dt) but low_frequency='zero' imposes B(0) = 0", stacklevel=3)
+    return low_frequency
+
+
+def _hankel_svd(markov: np.ndarray, dt: float, order: int | None, max_order: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, list[int]]:
+    """SVD ``u, sv, vt`` of the Hankel matrix of the Markov parameters (sampled every
+    ``dt`` [s]), the shifted Hankel matrix, the decimated step [s] and the orders to try."""
+    nt, p, _ = markov.shape
     # decimate so that the Hankel matrix spans the whole kernel with at most MAX_HANKEL blocks
     step = max(1, int(np.ceil((nt - 1) / (2 * MAX_HANKEL))))
     mk = markov[::step]
-    dth = dt0 * step
     rows = (mk.shape[0] - 1) // 2
     cols = mk.shape[0] - 1 - rows
     if rows < 2:
@@ -379,33 +425,10 @@ def fit_radiation_ss(
     if order is not None:
         if not 1 <= order <= min(rows * p, np.sum(sv > 0)):
             raise InputError(f"order must be between 1 and {min(rows * p, np.sum(sv > 0))}")
-        candidates = [int(order)]
-    else:
-        if max_order < 1:
-            raise InputError("max_order must be >= 1")
-        candidates = list(range(1, max(n_max, 1) + 1))
-    def fit_n(n: int) -> _Fit | None:
-        fit = _fit_order(u, sv, vt, h1, n, m, dth, t_all, markov, low_frequency)
-        too_fast = max_pole is not None and fit is not None and \
-            np.abs(np.linalg.eigvals(fit.a)).max() > max_pole
-        return None if too_fast else fit
-
-    best = _select_order(fit_n, candidates, tol, markov, passive, fixed=order is not None)
-    if best is None:
-        raise InputError("no stable state-space realisation found for K; check the kernel")
-    err = best.error
-    ss = RadiationSS(A=best.a, B=best.b * s_rad[None], C=s_inf[:, None] * best.c,
-                     D=np.zeros((p, m)), radiating_dof=rad, influenced_dof=inf,
-                     n_reflected=best.n_reflected, converged=err < tol or order is not None,
-                     dt_fit=dth, low_frequency=low_frequency, passivity_min=best.passivity)
-    ss.fit_error = _fit_errors(ss, arr, dt0, err, coeffs)
-    if not ss.converged:
-        warnings.warn(f"radiation state space: order {ss.order} reaches a fit error of "
-                      f"{err:.3g} > tol={tol}", stacklevel=2)
-    if passive and best.passivity < -PASSIVITY_TOL:
-        warnings.warn(f"radiation state space: passivity not reached (smallest relative "
-                      f"eigenvalue of Re K̂(iω) {best.passivity:.3g})", stacklevel=2)
-    return ss
+        return u, sv, vt, h1, dt * step, [int(order)]
+    if max_order < 1:
+        raise InputError("max_order must be >= 1")
+    return u, sv, vt, h1, dt * step, list(range(1, max(n_max, 1) + 1))
 
 
 def _select_order(fit_n, candidates: list[int], tol: float, markov: np.ndarray,
@@ -461,7 +484,9 @@ def _dof_scales(arr: np.ndarray, rad: list[str], inf: list[str], balance: bool |
 
     The fit works on ``K_ij / (s_i s_j)``, a congruence that leaves passivity unchanged and
     makes every diagonal kernel of size 1: in SI units a spar's pitch kernel is ~10⁴ times
-    its surge kernel and would otherwise decide the fit alone."""
+    its surge kernel (N m s/rad of a rotation against N s/m of a translation) and would
+    otherwise decide the fit alone; the realisation is scaled back (``B`` by ``s_rad``, ``C``
+    by ``s_inf``)."""
     if balance and list(rad) != list(inf):
         raise InputError("balance needs the same radiating and influenced DOFs")
     if balance is False or list(rad) != list(inf):

@@ -47,14 +47,8 @@ from typing import Any
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.history import (
-    NETCDF_MAGIC,
-    TextTable,
-    finalize_import,
-    read_csv,
-    read_netcdf,
-    set_mass,
-)
+from hybridwsi.history import (KINEMATICS, NETCDF_MAGIC, TextTable, finalize_import, force_names,
+                               read_csv, read_netcdf, set_mass)
 from hybridwsi.importers.dualsphysics import (
     OUTPUT_JITTER,
     _key,
@@ -134,8 +128,6 @@ _READERS: dict[str, Callable[..., xr.Dataset]] = {
 
 def _require_units(ds, path) -> None:
     """A NetCDF history must say its units: a missing attribute would be read as SI silently."""
-    from hybridwsi.history import KINEMATICS, force_names
-
     names = ["time", *(k for k in KINEMATICS if k in ds.variables), *force_names(ds)]
     missing = [n for n in names if n in ds.variables and "units" not in ds.variables[n].attrs
                and "units_per_dof" not in ds.variables[n].attrs]

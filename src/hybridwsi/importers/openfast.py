@@ -395,6 +395,46 @@ def _estimate(ds: xr.Dataset, role: str, reason: str, notes: list[str]) -> xr.Da
     return out
 
 
+def _platform_dofs(ch: OpenFASTChannels, dofs: str | Sequence[str] | None) -> list[str]:
+    """The DOFs asked for, or every DOF whose displacement channel is in the file."""
+    if dofs is None:
+        dofs = [d for d in _dofs.RIGID_DOFS if ch.find(motion_channels("z", d)) is not None]
+        if not dofs:
+            raise InputError(f"{ch.path.name}: no platform displacement channel (PtfmSurge ... "
+                             "PtfmYaw or PRPSurge ...); channels: "
+                             f"{', '.join(ch.names[:12])}{' ...' if len(ch.names) > 12 else ''}")
+    return list(_dofs.check_dofs(dofs))
+
+
+def _motion(ch: OpenFASTChannels, dofs: list[str]
+            ) -> tuple[dict[str, np.ndarray], dict[str, list[str]], dict[str, list[str]]]:
+    """Displacement (required), velocity and acceleration of ``dofs`` in SI by role, the
+    channels read per role, and the channels missing per derivative (estimated later)."""
+    z, z_used, z_missing = _role(ch, "z", dofs)
+    if z is None:
+        raise InputError(f"{ch.path.name}: no displacement channel for {', '.join(z_missing)} "
+                         f"(looked for {', '.join(motion_channels('z', z_missing[0]))})")
+    kin = {"z": z}
+    used = {"z": z_used}
+    missing: dict[str, list[str]] = {}
+    for role in ("zdot", "zddot"):
+        values, cols, absent = _role(ch, role, dofs)
+        if values is not None:
+            kin[role], used[role] = values, cols
+        else:
+            missing[role] = [motion_channels(role, d)[0] for d in absent]
+    return kin, used, missing
+
+
+def _describe_forces(ds: xr.Dataset, force_used: dict[str, list[str]]) -> None:
+    """Each force variable's description: what it is and the channels it sums, in place."""
+    for var, (_, desc) in FORCE_CHANNELS.items():
+        if var in ds:
+            ds[var].attrs["description"] = f"{desc} ({', '.join(force_used[var])})"
+    if "F_tot" in ds:
+        ds["F_tot"].attrs["description"] = "mass matrix x zddot (total force on the rigid platform)"
+
+
 def read_openfast(
     path: str | os.PathLike,
     dofs: str | Sequence[str] | None = None,
@@ -435,26 +475,8 @@ def read_openfast(
     ch = read_channels(path)
     t = ch.si(0, 1.0, "time")
     t, time_note = _snap_time(t)
-    if dofs is None:
-        dofs = [d for d in _dofs.RIGID_DOFS if ch.find(motion_channels("z", d)) is not None]
-        if not dofs:
-            raise InputError(f"{ch.path.name}: no platform displacement channel (PtfmSurge ... "
-                             "PtfmYaw or PRPSurge ...); channels: "
-                             f"{', '.join(ch.names[:12])}{' ...' if len(ch.names) > 12 else ''}")
-    dofs = list(_dofs.check_dofs(dofs))
-    z, z_used, z_missing = _role(ch, "z", dofs)
-    if z is None:
-        raise InputError(f"{ch.path.name}: no displacement channel for {', '.join(z_missing)} "
-                         f"(looked for {', '.join(motion_channels('z', z_missing[0]))})")
-    kin = {"z": z}
-    used = {"z": z_used}
-    missing: dict[str, list[str]] = {}
-    for role in ("zdot", "zddot"):
-        values, cols, absent = _role(ch, role, dofs)
-        if values is not None:
-            kin[role], used[role] = values, cols
-        else:
-            missing[role] = [motion_channels(role, d)[0] for d in absent]
+    dofs = _platform_dofs(ch, dofs)
+    kin, used, missing = _motion(ch, dofs)
     forces, force_used, notes = _forces(ch, dofs)
     if mass is not None and "zddot" in kin:
         f_tot = _mass_force(mass, kin["zddot"], dofs)
@@ -473,11 +495,7 @@ def read_openfast(
         extra_vars={k: v[0] for k, v in series.items()},
         extra_coords={v[1][0]: v[1][1] for v in series.values()},
     )
-    for var, (_, desc) in FORCE_CHANNELS.items():
-        if var in ds:
-            ds[var].attrs["description"] = f"{desc} ({', '.join(force_used[var])})"
-    if "F_tot" in ds:
-        ds["F_tot"].attrs["description"] = "mass matrix x zddot (total force on the rigid platform)"
+    _describe_forces(ds, force_used)
     if time_note:
         ds.attrs["time_regridded"] = time_note
     ds = finalize_import(ds, resample_to_uniform=resample, require_uniform=require_uniform)

@@ -43,6 +43,7 @@ from hybridwsi.history import mean_crossing_period
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import natural_frequencies
 from hybridwsi.report.fowt_hybrid import run_fowt_hybrid
+from hybridwsi.report.fowt_moordyn_hybrid import report_section as design_hybrid_section
 from hybridwsi.report.plots import save
 from hybridwsi.waves import Regular, excitation_force
 
@@ -54,6 +55,11 @@ DECAY_OFFSET = {"Surge": 5.0, "Heave": 1.0, "Pitch": 0.02}
 #: three longer ones towards the heave/pitch resonance (~30 s)
 RAO_PERIODS = (4.8, 6.5, 8.1, 9.7, 11.3, 13.6, 17.0, 20.0, 25.0)
 RAO_HEIGHT = 1.0  # m: linear system, the height only scales the response
+
+
+#: rad/s: the frequency-domain RAO curve, from the shipped coefficients' lowest frequency (0.025)
+#: to 2: the surge (0.0505), heave (0.201) and pitch (0.213) resonances are in it (issue 29)
+RAO_OMEGA_RANGE = (0.025, 2.0)
 
 
 def oc3_coefficients(case: dict[str, Any] | None = None, cache_dir: Path | None = None
@@ -257,6 +263,7 @@ def rao_figure(points: Sequence[dict[str, Any]], omegas: np.ndarray, curve: np.n
         ax.plot(w_td, td[:, i], "o", ms=5, label="time domain (steady state)")
         ax.set_ylabel(f"|{dof}| / a [{_unit_per_wave(dof)}]")
         ax.set_yscale("log")
+        ax.set_xscale("log")
         ax.grid(alpha=0.3, which="both")
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("ω [rad/s]")
@@ -320,7 +327,7 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False,
     periods = RAO_PERIODS[::2] if quick else RAO_PERIODS
     points = [rao_point(coeffs, forces, p, stiffness=k3, damping=damping, quick=quick)
               for p in periods]
-    omegas = np.linspace(2 * math.pi / 30.0, 2 * math.pi / 4.5, 300)
+    omegas = np.geomspace(*RAO_OMEGA_RANGE, 400)
     curve = rao_curve(coeffs, k3, damping, omegas)
     _write_json(folder / "rao.json", {"dofs": list(DOFS), "wave_height": RAO_HEIGHT,
                                       "units": {d: _unit_per_wave(d) for d in DOFS},
@@ -329,10 +336,12 @@ def run_fowt(out: Path, *, quick: bool = False, progress: bool = False,
     save(fig, folder / "rao.png")
     ds.to_netcdf(folder / "rao.nc")
     log("RAOs")
+    design_md = design_hybrid_section(folder)  # the shipped MoorDyn-coupled runs: no MoorDyn
+    log("the hybrid on the MoorDyn-coupled reference")
     hybrid_md = run_fowt_hybrid(folder, case, coeffs,
                                 *linear_components(case, case["hybrid"]["dofs"], stiffness=k6),
                                 write_json=_write_json, quick=quick, log=log) if hybrid else ""
-    return fowt_markdown(mooring, nat, points, time.time() - start, hybrid_md)
+    return fowt_markdown(mooring, nat, points, time.time() - start, design_md + hybrid_md)
 
 
 def fowt_markdown(mooring: dict[str, Any], nat: dict[str, Any],

@@ -1,24 +1,15 @@
-"""The 3-DOF hybrid of OC3-Hywind (issue 13 item 8) and the fowt report's items 7–8.
+"""The report's floating-wind hybrid (OC3-Hywind, issue 13 items 7–8): tables, figure, files.
 
-A :class:`~hybridwsi.surrogate.network.ForceNetwork` learns each network partition's residual of
-:mod:`hybridwsi.report.fowt_diagnostic` (surge, heave, pitch) from irregular seas (the
-``[hybrid] train`` seas); :func:`~hybridwsi.surrogate.rollout.check_stability` (the network's
-linearisation in the very step map of the rollout) predicts stability before each rollout; the
-held-out seas (``[hybrid] test``) give the rollout error per DOF (% of the reference's RMS);
-each partition is rolled out both ``lagged`` (the diagnostic's setting) and in the configured
-mode (``corrected``); the recommended partition then runs the ``long`` sea (3 hours).
-
-The 3-hour case is a linear Cummins run of the same sea (it supplies the time grid, ``eta``,
-``F_exc`` and the initial window; a nonlinear reference of that length would cost more than
-the rollout): the check there is stability (bounded, no drift), and the hybrid's RMS motion is
-reported beside the linear one.
+The study (reference seas, the multi-DOF diagnostic, a network per partition, stability
+predicted and observed, the 3-hour sea) is :func:`hybridwsi.surrogate.fowt.run_study`;
+:func:`run_fowt_hybrid` runs it and writes ``diagnostic.json``, ``hybrid.json`` and
+``hybrid_rollout.png/.nc``, and returns the report's Markdown (:func:`diagnostic_markdown`,
+:func:`hybrid_markdown`).
 """
 
 from __future__ import annotations
 
-import time
-import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -26,101 +17,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from hybridwsi.cummins import build_system, simulate
 from hybridwsi.dofs import motion_unit
-from hybridwsi.forces import KnownComponent, MooringForce
-from hybridwsi.report import fowt_diagnostic as fd
+from hybridwsi.forces import KnownComponent
 from hybridwsi.report.plots import save
-from hybridwsi.surrogate.network import ForceNetwork
-from hybridwsi.surrogate.rollout import check_stability, corrections_for, rollout
-
-#: rollout error [% of the reference RMS, any DOF] above which a run that did not blow up still
-#: counts as unstable: a growing mode held bounded only by the network's saturation (an
-#: uncorrelated response of the right size would give ~141 %)
-DIVERGED_PERCENT = 100.0
-
-def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
-    """RMS of (hybrid − reference) z per DOF over the hybrid's times, in % of the reference's
-    RMS z on those times (inf when the hybrid is not finite)."""
-    t = hist["time"].values
-    z_ref = ref["z"].sel(time=t, method="nearest").values
-    z = hist["z"].values
-    if not np.all(np.isfinite(z)):
-        return [float("inf")] * z.shape[1]
-    err = np.sqrt(np.mean((z - z_ref) ** 2, axis=0))
-    return (100.0 * err / np.sqrt(np.mean(z_ref ** 2, axis=0))).tolist()
-
-
-def run_partition(name: str, known: Sequence[KnownComponent], net_kw: Mapping[str, Any],
-                  train: Sequence[xr.Dataset], test: Sequence[xr.Dataset], mass: np.ndarray,
-                  mode: str) -> tuple[dict[str, Any], ForceNetwork, Any]:
-    """Train the partition's network (``net_kw``: ForceNetwork settings with ``inputs``),
-    predict, roll out (lagged and ``mode``) on the held-out seas.
-
-    Returns the JSON entry, the network and the ``mode`` rollout (for the figure).
-    """
-    t0 = time.time()
-    net = ForceNetwork(**{**net_kw, "inputs": tuple(net_kw["inputs"])}).fit(list(train), "F_bb", known=list(known))
-    entry: dict[str, Any] = {"partition": name, "network": {k: (list(v) if isinstance(v, tuple) else v)
-                                         for k, v in net_kw.items()},
-                             "known": [k.describe() for k in known],
-                             "left_to_network": fd.RESIDUAL[name],
-                             "train_s": time.time() - t0,
-                             "r2_held_out": float(np.mean([net.score(h, "F_bb", known=list(known))
-                                                           for h in test]))}
-    res_mode = None
-    for m in dict.fromkeys(("lagged", mode)):
-        pred = check_stability(net, train, mass=mass, known=known, mode=m)
-        n_corr = corrections_for(pred.added_mass_ratio) if m == "corrected" else 1
-        if n_corr != 1:
-            pred = check_stability(net, train, mass=mass, known=known, mode=m,
-                                   corrections=n_corr)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # unstable ones run on purpose
-            res = rollout(net, list(test), mass=mass, known=known, mode=m, corrections=n_corr,
-                          check=False)
-        entry[m] = {"corrections": n_corr if m == "corrected" else 0,
-                    "spectral_radius": pred.spectral_radius,
-                    "added_mass_ratio": pred.added_mass_ratio,
-                    "alpha_s": np.asarray(pred.alpha_s).tolist(),
-                    "predicted_stable": bool(pred.stable),
-                    "blew_up": res.blew_up.tolist(),
-                    "rollout_error_percent_rms": [dict(zip(_dofs(h), nrms_percent(r, h)))
-                                                  for r, h in zip(res.histories, test)]}
-        worst = max(max(c.values()) for c in entry[m]["rollout_error_percent_rms"])
-        entry[m]["observed_stable"] = bool(not res.blew_up.any() and worst <= DIVERGED_PERCENT)
-        entry[m]["agree"] = entry[m]["predicted_stable"] == entry[m]["observed_stable"]
-        if m == mode:
-            res_mode = res
-    return entry, net, res_mode
-
-
-def _dofs(hist: xr.Dataset) -> list[str]:
-    """The history's DOF names."""
-    return [str(d) for d in hist["dof"].values]
-
-
-def long_run(net: ForceNetwork, known: Sequence[KnownComponent], case_hist: xr.Dataset,
-             mass: np.ndarray, mode: str) -> dict[str, Any]:
-    """The recommended partition over the long sea: predicted, blown up, RMS per DOF, drift."""
-    pred = check_stability(net, case_hist, mass=mass, known=known, mode=mode, stride=20)
-    n_corr = corrections_for(pred.added_mass_ratio) if mode == "corrected" else 1
-    t0 = time.time()
-    res = rollout(net, [case_hist], mass=mass, known=known, mode=mode, corrections=n_corr,
-                  check=False)
-    wall = time.time() - t0
-    h = res.histories[0]
-    z = h["z"].values
-    dofs = _dofs(h)
-    tail = z[-len(z) // 10:]
-    return {"duration_s": float(h["time"][-1] - h["time"][0]), "wall_s": wall,
-            "predicted_stable": bool(pred.stable), "spectral_radius": pred.spectral_radius,
-            "blew_up": bool(res.blew_up[0]),
-            "rms_hybrid": dict(zip(dofs, np.sqrt(np.mean(z ** 2, axis=0)).tolist())),
-            "rms_linear_reference": dict(zip(dofs, np.sqrt(np.mean(
-                case_hist["z"].values ** 2, axis=0)).tolist())),
-            "max_abs_hybrid": dict(zip(dofs, np.abs(z).max(axis=0).tolist())),
-            "mean_last_10pct": dict(zip(dofs, tail.mean(axis=0).tolist()))}
+from hybridwsi.surrogate.fowt import DIVERGED_PERCENT, run_study
 
 
 def json_safe(value: Any) -> Any:
@@ -139,7 +39,7 @@ def json_safe(value: Any) -> Any:
 def rollout_figure(hybrid: xr.Dataset, ref: xr.Dataset, title: str
                    ) -> tuple[plt.Figure, xr.Dataset]:
     """Held-out rollout against the reference, one panel per DOF (units per DOF)."""
-    dofs = _dofs(hybrid)
+    dofs = [str(d) for d in hybrid["dof"].values]
     t = hybrid["time"].values
     z_ref = ref["z"].sel(time=t, method="nearest").values
     fig, axes = plt.subplots(len(dofs), 1, figsize=(8, 7), sharex=True)
@@ -183,7 +83,8 @@ def hybrid_markdown(hyb: Mapping[str, Any]) -> str:
             worst = {d: max(c[d] for c in e["rollout_error_percent_rms"])
                      for d in e["rollout_error_percent_rms"][0]}
             lines.append(
-                f"| {p['partition']} | {m}{' ×' + str(e['corrections']) if e['corrections'] else ''}"
+                f"| {p['partition']} | "
+                f"{m}{' ×' + str(e['corrections']) if e['corrections'] else ''}"
                 f" | {e['added_mass_ratio']:.3f} | {e['spectral_radius']:.4f} | "
                 f"{'stable' if e['predicted_stable'] else 'unstable'} | "
                 f"{_observed(e)} | "
@@ -197,7 +98,49 @@ def hybrid_markdown(hyb: Mapping[str, Any]) -> str:
                   f"{lr['rms_hybrid']['Pitch']:.3g} rad (linear Cummins "
                   f"{lr['rms_linear_reference']['Surge']:.3g} / "
                   f"{lr['rms_linear_reference']['Heave']:.3g} / "
-                  f"{lr['rms_linear_reference']['Pitch']:.3g}); rollout {lr['wall_s']:.1f} s."]
+                  f"{lr['rms_linear_reference']['Pitch']:.3g}); prediction and rollout "
+                  f"{lr['wall_s']:.1f} s."]
+    return "\n".join(lines) + "\n"
+
+
+def diagnostic_markdown(diag: Mapping[str, Any], observed: Mapping[str, bool] | None = None
+                        ) -> str:
+    """The multi-DOF Table-1 analogue and the hand-over table."""
+    observed = dict(observed or {})
+    accs = list(diag["partitions"][0]["identifiable"])
+
+    def ident(r: Mapping[str, Any], key: str) -> str:
+        """Identifiable DOFs (or the coupling) at each stated accuracy, '/'-separated."""
+        out = []
+        for acc in accs:
+            v = r["identifiable"][acc]
+            out.append(("yes" if v[key] else "no") if key == "surge_pitch_coupling" else
+                       (", ".join(d for d, ok in v["per_dof"].items() if ok) or "none"))
+        return " / ".join(out)
+
+    lines = ["### Diagnostic in several DOFs (surge, heave, pitch)", "",
+             f"JONSWAP Hs {diag['history']['sea']['hs']} m, Tp {diag['history']['sea']['tp']} s, "
+             f"{diag['history']['duration_s']:.0f} s, Δt {diag['history']['dt']} s; "
+             f"ρ(M⁻¹A∞) = {diag['rho_M_inv_A_inf']:.3f} (surge alone A11/M11 = "
+             f"{diag['added_mass_inf'][0][0] / diag['mass'][0][0]:.3f}).", "",
+             "| partition | α diag [kg, kg, kg m²] | α surge–pitch [kg m] | γ diag [N/m, N/m, "
+             f"N m/rad] | R² min | identifiable DOFs at {' / '.join(accs)} | surge–pitch "
+             "coupling | ρ((M+A_k)⁻¹α) "
+             "| lagged | observed |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in diag["partitions"]:
+        a, g = np.asarray(r["alpha"]), np.asarray(r["gamma"])
+        obs = r.get("observed", {}).get("observed_stable", observed.get(r["partition"]))
+        obs_s = "—" if obs is None else ("stable" if obs else "unstable")
+        lines.append(
+            f"| {r['partition']} | {a[0, 0]:.4g}, {a[1, 1]:.4g}, {a[2, 2]:.4g} | "
+            f"{a[0, 2]:.4g} / {a[2, 0]:.4g} | {g[0, 0]:.4g}, {g[1, 1]:.4g}, {g[2, 2]:.4g} | "
+            f"{min(r['r2']):.4f} | {ident(r, 'per_dof')} | {ident(r, 'surge_pitch_coupling')} | "
+            f"{r['added_mass_ratio']:.4f} | "
+            f"{r['lagged_verdict']} | {obs_s} |")
+    lines += ["", "| partition | left to the network | goes to | reason |", "|---|---|---|---|"]
+    for r in diag["partitions"]:
+        lines.append(f"| {r['partition']} | {r['left_to_network']} | {r['where']} | "
+                     f"{r['reason']} |")
     return "\n".join(lines) + "\n"
 
 
@@ -212,56 +155,19 @@ def run_fowt_hybrid(folder: Path, case: Mapping[str, Any], coeffs: xr.Dataset,
     ``mooring_linear`` is −K q on ``[hybrid] dofs`` (MoorPy's K), ``damping`` the additional
     linear damping (:func:`hybridwsi.casemodel.linear_components`).
     """
-    import torch
+    study = run_study(case, coeffs, mooring_linear, damping, quick=quick, log=log)
+    write_json(folder / "diagnostic.json", json_safe(study.diagnostic))
+    write_json(folder / "hybrid.json", json_safe(study.hybrid))
+    log("diagnostic.json, hybrid.json")
 
-    torch.set_num_threads(1)  # tiny networks on a shared machine
-    cfg = fd.hybrid_settings(case, quick)
-    dofs, dt = list(cfg["dofs"]), float(cfg["dt"])
-    mooring = MooringForce.from_case(case, dofs)
-    ss = build_system(coeffs, dofs=dofs, dt=dt).ss  # one fit for every sea
-
-    def histories(seas: Sequence[Mapping[str, Any]]) -> list[xr.Dataset]:
-        return [fd.irregular_history(coeffs, case, mooring, damping, s, dofs=dofs,
-                                     duration=cfg["duration"], dt=dt, ramp=cfg["ramp"],
-                                     radiation_ss=ss) for s in seas]
-
-    train, test = histories(cfg["train"]), histories(cfg["test"])
-    log("irregular-sea references")
-    diag = fd.diagnostic(train, mooring_linear, damping, cfg)
-    write_json(folder / "diagnostic.json", json_safe(diag))
-    log("diagnostic.json")
-
-    mass = fd.rigid_mass(train[0])
-    parts = fd.partitions(train[0], mooring_linear, damping)
-    entries, nets, shown = [], {}, None
-    for name, own in cfg["partitions"].items():
-        entry, net, res = run_partition(name, parts[name], {**cfg["network"], **own}, train,
-                                        test, mass, cfg["mode"])
-        entries.append(entry)
-        nets[name] = net
-        if name == "recommended":
-            shown = res
-        log(f"hybrid {name}")
-    hyb: dict[str, Any] = {"settings": {k: cfg[k] for k in ("dofs", "dt", "duration", "ramp",
-                                                           "train", "test", "mode")}
-                           | {"network": {**cfg["network"], "hidden": list(cfg["network"]["hidden"])}},
-                           "partitions": entries}
-    # the long case: linear Cummins (linearised mooring, additional damping) of the same sea
-    long_hist = simulate(coeffs, dofs=dofs, duration=float(cfg["long_duration"]), dt=dt,
-                         wave=fd.sea(cfg["long"]), ramp=cfg["ramp"], radiation_ss=ss,
-                         forces=[mooring_linear, damping])
-    hyb["long_run"] = {"sea": cfg["long"], **long_run(nets["recommended"],
-                                                      parts["recommended"], long_hist, mass,
-                                                      cfg["mode"])}
-    hyb["all_agree"] = all(p[m]["agree"] for p in entries for m in ("lagged", cfg["mode"]))
-    write_json(folder / "hybrid.json", json_safe(hyb))
-    log("hybrid.json and the long run")
-
-    fig, ds = rollout_figure(shown.histories[0], test[0],
+    first = study.settings["test"][0]
+    fig, ds = rollout_figure(study.shown.histories[0], study.test[0],
                              f"OC3-Hywind recommended hybrid, held-out sea Hs "
-                             f"{cfg['test'][0]['hs']} m, Tp {cfg['test'][0]['tp']} s")
+                             f"{first['hs']} m, Tp {first['tp']} s")
     save(fig, folder / "hybrid_rollout.png")
     ds.to_netcdf(folder / "hybrid_rollout.nc")
+    entries = study.hybrid["partitions"]
     observed = {p["partition"]: p["lagged"]["observed_stable"] for p in entries}
-    return (fd.diagnostic_markdown(diag, observed) + "\n" + hybrid_markdown(hyb) + "\n"
+    return (diagnostic_markdown(study.diagnostic, observed) + "\n"
+            + hybrid_markdown(study.hybrid) + "\n"
             + "![hybrid rollout](fowt/hybrid_rollout.png)\n")

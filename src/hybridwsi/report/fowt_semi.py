@@ -40,18 +40,20 @@ from scipy.interpolate import CubicSpline
 from hybridwsi.casemodel import case_coefficients, radiation_ss
 from hybridwsi.cases import Case, load_case
 from hybridwsi.cummins import simulate
+from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.regression import regress
 from hybridwsi.dofs import RIGID_DOFS, motion_unit
 from hybridwsi.errors import InputError
-from hybridwsi.files import atomic_write
+from hybridwsi.files import _jsonable, atomic_write
 from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberMorison, \
     MooringForce, MooringSystem
 from hybridwsi.hydro import coefficients as co
 from hybridwsi.hydro.modal import Mode, natural_frequencies
-from hybridwsi.report import fowt_diagnostic as fd
 from hybridwsi.report.fowt import decay_figure, decay_frequency, decay_histories, rao_curve, \
     rao_point
+from hybridwsi.report.fowt_semi_hybrid import run_semi_hybrid, semi_hybrid_markdown
 from hybridwsi.report.plots import save
+from hybridwsi.surrogate import fowt as fd
 from hybridwsi.waves import JONSWAP
 
 #: initial offsets of the free decays [m, m, m, rad, rad, rad]: small (linear mooring)
@@ -214,7 +216,7 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
     identifiable, i.e. also the random error small), the lagged
     verdict (spectral radius of the Newmark lagged step at the history's Δt) and, for the
     linear known parts 1–3, the observed lagged run of the regressed surrogate
-    (:mod:`hybridwsi.report.fowt_diagnostic`, the OC3 analysis in six DOFs)."""
+    (:mod:`hybridwsi.surrogate.fowt`, the OC3 analysis in six DOFs)."""
     dofs = [str(d) for d in hist["dof"].values]
     dt = float(hist["time"].values[1] - hist["time"].values[0])
     parts = fd.partitions(hist, Hydrostatic(system.mooring), LinearDamping(np.zeros((6, 6))))
@@ -237,7 +239,7 @@ def semi_diagnostic(system: SemiSystem, hist: xr.Dataset, *,
                         "wave": hist.attrs.get("wave")},
             "std_z": dict(zip(dofs, np.asarray(hist["z"].values).std(axis=0).tolist())),
             "mass": mass.tolist(), "added_mass_inf": a_inf.tolist(),
-            "rho_M_inv_A_inf": fd.stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
+            "rho_M_inv_A_inf": stability.added_mass_ratio(mass, np.zeros_like(mass), a_inf),
             "partitions": rows}
 
 
@@ -363,10 +365,13 @@ def rao_worst(points: Sequence[Mapping[str, Any]], heading: float, key: str
     return out
 
 
-def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> str:
+def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False,
+                  hybrid: bool = True) -> str:
     """Write ``out/fowt_semi/`` (natural frequencies, decays, RAOs at three headings, the 6×6
-    diagnostic in a 30° sea; JSON, PNG and the NetCDF behind each figure) and return the
-    report section (Markdown). ``quick``: every other RAO period, a 300 s sea."""
+    diagnostic in a 30° sea, the hybrid: ``hybrid.json``, ``hybrid_rollout.png/.nc`` and the
+    model folder ``hybrid_model/``; JSON, PNG and the NetCDF behind each figure) and return
+    the report section (Markdown). ``quick``: every other RAO period, 300 s seas;
+    ``hybrid`` off: no hybrid (as :func:`hybridwsi.report.fowt.run_fowt`)."""
     start = time.time()
 
     def log(msg: str) -> None:
@@ -408,7 +413,16 @@ def run_fowt_semi(out: Any, *, quick: bool = False, progress: bool = False) -> s
     diag = semi_diagnostic(system, hist)
     write_json("diagnostic.json", diag)
     log("diagnostic")
-    return semi_markdown(nat, points, diag, time.time() - start)
+
+    hybrid_md = ""
+    if hybrid:
+        hyb, (fig, ds) = run_semi_hybrid(system, case, folder, quick=quick, log=log)
+        write_json("hybrid.json", _jsonable(hyb))
+        save(fig, folder / "hybrid_rollout.png")
+        ds.to_netcdf(folder / "hybrid_rollout.nc")
+        hybrid_md = "\n" + semi_hybrid_markdown(hyb)
+        log("hybrid")
+    return semi_markdown(nat, points, diag, time.time() - start) + hybrid_md
 
 
 def semi_markdown(nat: Mapping[str, Any], points: Sequence[Mapping[str, Any]],

@@ -36,12 +36,20 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import bodies, cummins, waves
 from hybridwsi._meta import version
+from hybridwsi.cases import load_case
+from hybridwsi.diagnostic.partition import select_partition, table_to_json
+from hybridwsi.diagnostic.reconstruct import reconstruct
+from hybridwsi.diagnostic.regression import regress
 from hybridwsi.errors import InputError
+from hybridwsi.forces.linear import known_from
 from hybridwsi.history import to_netcdf
 from hybridwsi.history import write_json as _write_json
 from hybridwsi.history import write_text as _write_text
-from hybridwsi.hydro import coefficients
+from hybridwsi.hydro import bem, coefficients
+from hybridwsi.importers import read_history
+from hybridwsi.report.kramer_hybrid import run_kramer_hybrid
 from hybridwsi.report.markdown import (
     PARTITION_LABELS,
     dynamic_stiffness_note,
@@ -51,6 +59,9 @@ from hybridwsi.report.markdown import (
     table1_markdown,
     wave_note,
 )
+from hybridwsi.report.validation import run_decay_validation
+from hybridwsi.sph import tank
+from hybridwsi.sph.run import run_case
 
 SPH_HISTORY = "sph_regular_waves.nc"
 #: the SPH run's resume checkpoint (hybridwsi.sph.run.run_case), kept across killed runs
@@ -72,8 +83,6 @@ def _log(msg: str, progress: bool) -> None:
 
 
 def _bem_coefficients(body, cfg: dict, progress: bool, water_depth: float | None = None):
-    from hybridwsi.hydro import bem
-
     omega = np.geomspace(cfg["omega_min"], cfg["omega_max"], cfg["n_omega"])
     depth = cfg.get("water_depth", np.inf) if water_depth is None else water_depth
     return bem.compute(body, omega, water_depth=depth, n_panels=cfg["n_panels"],
@@ -121,8 +130,6 @@ def _none_to_inf(value: Any) -> Any:
 def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dict[str, list]:
     """The paper's three partitions: C and A∞ from the history's matrices, else from the
     coefficients (:func:`hybridwsi.forces.linear.known_from`, the one route)."""
-    from hybridwsi.forces.linear import known_from
-
     hydrostatic, added_mass_inf = known_from(hist, coeffs, ["hydrostatic", "added_mass_inf"])
     return {"1": [], "2": [hydrostatic], "3": [hydrostatic, added_mass_inf]}
 
@@ -130,8 +137,6 @@ def table1_partitions(coeffs: xr.Dataset, hist: xr.Dataset | None = None) -> dic
 def regress_table1(hist: xr.Dataset, partitions: dict[str, list],
                    force_accuracy: float) -> dict[str, Table1Case]:
     """Regress F_bb of each partition on the reference motion (paper Eq. 5–7)."""
-    from hybridwsi.diagnostic.regression import regress
-
     return {
         k: Table1Case(PARTITION_LABELS[k], regress(hist, force="F_tot", known=known,
                                                    force_accuracy=force_accuracy), known)
@@ -168,8 +173,6 @@ def figure2(hist: xr.Dataset, cases: dict[str, Table1Case], mass: float, out: Pa
     nothing known the error grows as δF t²/2m (drift), with C known it stays bounded (δF/C),
     with damping in the ODE it settles. Metrics are reported for clean and biased forces.
     """
-    from hybridwsi.diagnostic.reconstruct import reconstruct
-    from hybridwsi.diagnostic.regression import regress
     from hybridwsi.report import plots  # matplotlib: imported only when drawing
 
     ident = (regress(hist, force=motion_force, force_accuracy=force_accuracy)
@@ -225,7 +228,6 @@ def outlook(hist: xr.Dataset, coeffs: xr.Dataset, out: Path, *, quick: bool,
     docs/THEORY.md §5) and ``hybrid_demo.json`` (predicted vs observed stability of a network-in-the-loop rollout);
     returns the Markdown section of the report.
     """
-    from hybridwsi.diagnostic.partition import select_partition, table_to_json
     from hybridwsi.surrogate.demo import hybrid_demo
 
     _log("Outlook: component selection", progress)
@@ -263,8 +265,6 @@ def read_sph_history(src: Path, *, mass: float | None, period: float,
     ``MIN_SPH_PERIODS`` wave periods ``period`` [s] after ``window_start`` [s] (Table 1's
     regression window). Raises :class:`InputError` otherwise: called before any BEM run.
     """
-    from hybridwsi.importers import read_history
-
     if not src.is_file():
         raise InputError(f"--sph-history: no such file {src}")
     hist = _needs_force(read_history(src, mass=mass), src)
@@ -296,13 +296,8 @@ def sph_history(out: Path, *, recompute: bool = False, path: str | Path | None =
     ``read_history`` understands (:func:`read_sph_history`); else the history shipped in
     ``hybridwsi/data``; else none ("pending").
     """
-    from hybridwsi.cases import load_case
-
     case = load_case("paper_sphere")
     if recompute:
-        from hybridwsi.sph import tank
-        from hybridwsi.sph.run import run_case
-
         cfg = case["sph_regular_waves"]  # the shipped run's set-up
         sph_case = tank.build("regular3d", **{**cfg, "dp": dp or cfg["dp"]})
         target = out / "histories" / SPH_HISTORY
@@ -390,8 +385,6 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     history (:func:`sph_history`). Inputs are checked first; the folder is replaced as a whole
     when the new set is complete (module docstring).
     """
-    from hybridwsi.cases import load_case
-
     out = Path(out).absolute()
     check_out_folder(out)
     case = load_case("paper_sphere")
@@ -416,13 +409,43 @@ def run(out: str | Path = "results", *, quick: bool = False, progress: bool = Tr
     return summary
 
 
+def _decay_section(out: Path, *, quick: bool, progress: bool) -> str:
+    """Fig. 1: the Kramer sphere's BEM and the decay runs against the experiment, written
+    into ``out``; returns the section's Markdown."""
+    from hybridwsi.report import plots  # matplotlib: imported only when drawing
+
+    kcase = load_case("kramer2021_decay")
+    kcfg = kcase["bem_quick" if quick else "bem"]
+    _log("Fig. 1: BEM of the Kramer sphere and decay runs", progress)
+    kbody = bodies.FloatingSphere.kramer2021()
+    kcoeffs = _bem_coefficients(kbody, kcfg, progress,
+                                water_depth=kcase["experiment"]["water_depth"])
+    val = run_decay_validation(kcoeffs, progress=progress)
+    to_netcdf(val.curves, out / "fig1_decay.nc")
+    plots.save(plots.decay_validation_figure(val.curves), out / "fig1_decay.png")
+    _write_json(out / "decay_validation.json", val.to_json())
+    decay_md = val.to_markdown()
+    _write_text(out / "decay_validation.md", decay_md + "\n")
+    return decay_md
+
+
+def _fowt_section(out: Path, *, quick: bool, progress: bool) -> str:
+    """Floating wind: OC3-Hywind (mooring, natural frequencies, decays, RAOs) and the OC4
+    semi (also its 6x6 diagnostic), written into ``out``; returns their Markdown."""
+    # the FOWT reports draw (matplotlib) and train networks (PyTorch): imported when run
+    from hybridwsi.report.fowt import run_fowt
+    from hybridwsi.report.fowt_semi import run_fowt_semi
+
+    _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
+    fowt_md = run_fowt(out, quick=quick, progress=progress)
+    _log("OC4-DeepCwind semi: natural frequencies, decays, RAOs, 6x6 diagnostic", progress)
+    return fowt_md + "\n" + run_fowt_semi(out, quick=quick, progress=progress)
+
+
 def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, hybrid: bool,
            recompute_sph: bool, sph_pre: tuple[xr.Dataset, str] | None, sph_dp: float | None,
            sph_openmp: bool) -> dict[str, Any]:
     """Write the whole results set into ``out`` (the partial folder)."""
-    from hybridwsi import bodies, cummins, waves
-    from hybridwsi.cases import load_case
-
     t0 = time.perf_counter()
     cfg = case["bem_quick" if quick else "bem"]
     b = case["body"]
@@ -474,42 +497,14 @@ def _build(out: Path, case: dict, *, quick: bool, progress: bool, decay: bool, h
                               b["mass"], out, "SPH", "fig2_sph", force_accuracy=acc["SPH"])
     _write_json(out / "fig2_metrics.json", fig2)
 
-    decay_md = "Decay validation skipped."
-    if decay:
-        from hybridwsi.report import plots  # matplotlib: imported only when drawing
-        from hybridwsi.report.validation import run_decay_validation
-
-        kcase = load_case("kramer2021_decay")
-        kcfg = kcase["bem_quick" if quick else "bem"]
-        _log("Fig. 1: BEM of the Kramer sphere and decay runs", progress)
-        kbody = bodies.FloatingSphere.kramer2021()
-        kcoeffs = _bem_coefficients(kbody, kcfg, progress,
-                                    water_depth=kcase["experiment"]["water_depth"])
-        val = run_decay_validation(kcoeffs, progress=progress)
-
-        to_netcdf(val.curves, out / "fig1_decay.nc")
-        plots.save(plots.decay_validation_figure(val.curves), out / "fig1_decay.png")
-        _write_json(out / "decay_validation.json", val.to_json())
-        decay_md = val.to_markdown()
-        _write_text(out / "decay_validation.md", decay_md + "\n")
-
+    decay_md = _decay_section(out, quick=quick, progress=progress) if decay else \
+        "Decay validation skipped."
     kramer_md = ""
     if decay and hybrid:  # the hybrid on the measured decays (leave one drop out)
-        from hybridwsi.report.kramer_report import run_kramer_hybrid
-
         _log("Kramer hybrid: leave one drop out", progress)
         kramer_md = run_kramer_hybrid(out, quick=quick, progress=progress)
-
-    fowt_md = ""
-    if decay:  # floating wind: OC3-Hywind mooring, natural frequencies, decays, RAOs
-        from hybridwsi.report.fowt import run_fowt
-
-        _log("OC3-Hywind: mooring, natural frequencies, decays, RAOs", progress)
-        fowt_md = run_fowt(out, quick=quick, progress=progress)
-        from hybridwsi.report.fowt_semi import run_fowt_semi
-
-        _log("OC4-DeepCwind semi: natural frequencies, decays, RAOs, 6x6 diagnostic", progress)
-        fowt_md += "\n" + run_fowt_semi(out, quick=quick, progress=progress)
+    # floating wind: OC3-Hywind and the OC4 semi
+    fowt_md = _fowt_section(out, quick=quick, progress=progress) if decay else ""
 
     outlook_md = (outlook(hist, coeffs, out, quick=quick, progress=progress,
                           force_accuracy=acc["BEM"]) if hybrid else "")

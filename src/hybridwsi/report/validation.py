@@ -17,54 +17,20 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi import bodies, cummins
+from hybridwsi.cases import load_case
 from hybridwsi.errors import InputError
-from hybridwsi.history import fit_damped_oscillator, mean_crossing_period
+from hybridwsi.history import fit_damped_oscillator
+from hybridwsi.history.signal import crossing_period, rms_heave_error
 from hybridwsi.importers.kramer import (
     KRAMER_DROPS,
     kramer_numerical_files,
     read_kramer_drop,
     read_kramer_numerical,
 )
+from hybridwsi.sph.decay import first_extrema, grid_convergence
 
 DROPS = KRAMER_DROPS
-
-
-def rms_heave_error(
-    t_model: np.ndarray,
-    zn_model: np.ndarray,
-    t_exp: np.ndarray,
-    zn_exp: np.ndarray,
-    te0: float,
-    window: tuple[float, float] = (0.0, 5.0),
-) -> float:
-    """RMS of normalised heave error over ``t/Te0 ∈ window`` on the experiment's grid.
-
-    Parameters
-    ----------
-    t_model, zn_model : ndarray
-        Model time [s] (increasing) and heave / H0 [-].
-    t_exp, zn_exp : ndarray
-        Experiment time [s] and mean heave / H0 [-].
-    te0 : float
-        Normalisation period [s].
-    window : (float, float)
-        Window in units of ``te0``.
-
-    Returns
-    -------
-    float
-        RMS error [-].
-    """
-    t_model = np.asarray(t_model, float)
-    lo, hi = window[0] * te0, window[1] * te0
-    sel = (t_exp >= lo - 1e-12) & (t_exp <= hi + 1e-12)
-    if t_model[0] > lo + 1e-9 or t_model[-1] < hi - 1e-9:
-        raise InputError(
-            f"model record [{t_model[0]:.3f}, {t_model[-1]:.3f}] s does not cover the RMS window "
-            f"[{lo:.3f}, {hi:.3f}] s"
-        )
-    zi = np.interp(t_exp[sel], t_model, zn_model)
-    return float(np.sqrt(np.mean((zi - zn_exp[sel]) ** 2)))
 
 
 @dataclass
@@ -130,16 +96,6 @@ class DecayValidation:
         return "\n".join(rows)
 
 
-def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -> float:
-    """Mean crossing period of a decay record over ``window`` (same unit as ``t``).
-
-    Every record here (experiment, published codes, our models) is heave measured from its
-    equilibrium, so the crossings are those of z = 0; the first half cycle, which depends on
-    the release, is skipped (:func:`hybridwsi.history.mean_crossing_period`).
-    """
-    return mean_crossing_period(t, z, window, z_eq=0.0, skip=1)
-
-
 def score_published_codes(drop: str, te0: float, window=(0.0, 5.0),
                           measured: xr.Dataset | None = None,
                           periods: dict[str, float] | None = None) -> dict[str, float]:
@@ -183,8 +139,6 @@ def decay_measures(t: np.ndarray, zn: np.ndarray, te0: float, measured: xr.Datas
         the first ``trough`` [-] and its time ``trough_t`` [s]; ``rms`` over [0, rms_window te0]
         as :func:`rms_heave_error` (NaN when the record is shorter).
     """
-    from hybridwsi.sph.decay import first_extrema  # pure NumPy; no PySPH
-
     t, zn = np.asarray(t, float), np.asarray(zn, float)
     fit = fit_damped_oscillator(t, zn, te0, (0.0, fit_window * te0))
     after = t >= 0.0  # a measured record starts before the release
@@ -247,8 +201,6 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
         the extrapolated value, the GCI of the finest run [%] and whether the three are
         monotone (in the asymptotic range; otherwise the GCI is not to be trusted).
     """
-    from hybridwsi.sph.decay import grid_convergence  # pure NumPy; no PySPH
-
     if len(rows) < 3:
         raise InputError(f"a grid convergence index needs runs at three spacings, got {len(rows)}")
     dps = sorted(rows)[:3]
@@ -261,6 +213,25 @@ def decay_convergence_table(rows: dict[float, dict[str, float]],
                      f"{g['extrapolated']:.4f} | {100 * g['gci_fine']:.2f} % | "
                      f"{'yes' if g['monotone'] else 'no'} |")
     return "\n".join(lines)
+
+
+def _experiment_curves(measured: dict[str, xr.Dataset], drops: tuple[str, ...], te0: float
+                       ) -> xr.Dataset:
+    """The measured heave / H0 (mean and 95 % band) of each drop on its own t / Te0 grid."""
+    return xr.concat(
+        [
+            xr.Dataset(
+                {
+                    "exp_mean": ("t_exp", measured[d]["z"].values[:, 0]),
+                    "exp_ci95_lower": ("t_exp", measured[d]["ci95_lower"].values.ravel()),
+                    "exp_ci95_upper": ("t_exp", measured[d]["ci95_upper"].values.ravel()),
+                },
+                coords={"t_exp": measured[d]["time"].values / te0},
+            )
+            for d in drops
+        ],
+        dim=pd.Index(list(drops), name="drop_test"),
+    )
 
 
 def run_decay_validation(
@@ -287,9 +258,6 @@ def run_decay_validation(
         Show a progress bar over the runs.
     """
     from tqdm.auto import tqdm
-
-    from hybridwsi import bodies, cummins
-    from hybridwsi.cases import load_case
 
     case = load_case("kramer2021_decay")
     te0 = case["experiment"]["Te0"]
@@ -340,20 +308,7 @@ def run_decay_validation(
     model = xr.combine_by_coords([c.to_dataset(name="heave_over_H0") for c in curves])[
         "heave_over_H0"
     ]
-    exp_ds = xr.concat(
-        [
-            xr.Dataset(
-                {
-                    "exp_mean": ("t_exp", exp_cache[d]["z"].values[:, 0]),
-                    "exp_ci95_lower": ("t_exp", exp_cache[d]["ci95_lower"].values.ravel()),
-                    "exp_ci95_upper": ("t_exp", exp_cache[d]["ci95_upper"].values.ravel()),
-                },
-                coords={"t_exp": exp_cache[d]["time"].values / te0},
-            )
-            for d in drops
-        ],
-        dim=pd.Index(list(drops), name="drop_test"),
-    )
+    exp_ds = _experiment_curves(exp_cache, drops, te0)
     ds = xr.merge([exp_ds, model])
     ds["t_exp"].attrs.update(units="1", long_name="t / Te0")
     ds.attrs.update(te0=te0, rms_window=str(window), dt=dt)

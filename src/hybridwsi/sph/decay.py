@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from hybridwsi.bodies import cap_volume
 from hybridwsi.errors import InputError
 from hybridwsi.history import crossing_periods
 from hybridwsi.importers.kramer import KRAMER_TE0, read_kramer_drop
@@ -50,7 +51,6 @@ def equilibrium_shift(z0: float, radius: float, tank_area: float) -> float:
     if not (0.0 <= z0 < radius) or tank_area <= math.pi * radius ** 2:
         raise InputError(f"need 0 <= z0 < R and a tank wider than the sphere (z0 = {z0}, "
                          f"R = {radius}, area = {tank_area})")
-    from hybridwsi.bodies import cap_volume
 
     dv = cap_volume(radius, radius) - cap_volume(radius - z0, radius)
     return dv / (tank_area - math.pi * radius ** 2)

@@ -113,9 +113,6 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
         ``residual_start``, ``residual`` (largest residual of the moving particles, [-]),
         ``iterations``, ``n_moving`` and ``n_added`` (negative: removed).
     """
-    dim = fluid.shape[1]
-    v = dim - 1
-    vol = dp ** dim
     pos = fluid.copy()
     dist = np.linalg.norm(pos - centre, axis=1) - radius
     moving = dist < band * dp
@@ -126,9 +123,25 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
                             surface, band, (pos.min(axis=0), pos.max(axis=0)))
         pos = np.vstack([pos[~moving], band_pts])
         moving = np.r_[np.zeros(len(pos) - len(band_pts), bool), np.ones(len(band_pts), bool)]
-    # fixed sources: the solids, the far fluid, a lattice cap above the still-water level
+    still, vstill = _fixed_sources(pos, moving, fixed, fixed_volumes, centre, radius, dp, h,
+                                   surface, band)
+    res0, res, it = _relax(pos, moving, still, vstill, centre, radius, dp, h, surface,
+                           mirror_axes, iterations, max_step, tol)
+    return pos, {"residual_start": res0, "residual": res, "iterations": it,
+                 "n_moving": int(moving.sum()), "n_added": n_added}
+
+
+def _fixed_sources(pos: np.ndarray, moving: np.ndarray, fixed: np.ndarray,
+                   fixed_volumes: np.ndarray | None, centre: np.ndarray, radius: float,
+                   dp: float, h: float, surface: float, band: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Positions [m] and volumes [m^dim] of the particles that stay put while the band moves:
+    the solids, the far fluid and a lattice cap above the still-water level, those within
+    reach of a moving particle only."""
+    dim = pos.shape[1]
+    vol = dp ** dim
     lo, hi = pos.min(axis=0) - 0.5 * dp, pos.max(axis=0) + 0.5 * dp
-    cap_axes = [np.arange(lo[a] + 0.5 * dp, hi[a], dp) for a in range(v)]
+    cap_axes = [np.arange(lo[a] + 0.5 * dp, hi[a], dp) for a in range(dim - 1)]
     cap_axes.append(surface + (np.arange(math.ceil(2.0 * h / dp) + 1) + 0.5) * dp)
     cap = np.stack([m.ravel() for m in np.meshgrid(*cap_axes, indexing="ij")], axis=1)
     cap = cap[np.linalg.norm(cap - centre, axis=1) >= radius]
@@ -138,7 +151,19 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
     vstill = np.r_[np.full(len(fixed), vol) if fixed_volumes is None else fixed_volumes,
                    np.full(len(cap) + int((~moving).sum()), vol)]
     near = np.linalg.norm(still - centre, axis=1) < reach + 2.0 * h
-    still, vstill = still[near], vstill[near]
+    return still[near], vstill[near]
+
+
+def _relax(pos: np.ndarray, moving: np.ndarray, still: np.ndarray, vstill: np.ndarray,
+           centre: np.ndarray, radius: float, dp: float, h: float, surface: float,
+           mirror_axes: Sequence[int], iterations: int, max_step: float, tol: float
+           ) -> tuple[float, float, int]:
+    """Move the ``moving`` particles of ``pos`` (in place) down the consistency residual
+    dp |sum_j V_j grad W_ij| until it falls below ``tol``; returns the first and last
+    residuals [-] and the iterations done (see :func:`pack_around_body`)."""
+    dim = pos.shape[1]
+    v = dim - 1
+    vol = dp ** dim
     n_img = 1 + len(_mirror(np.zeros((1, dim)), mirror_axes))
     box_lo, box_hi = pos.min(axis=0), pos.max(axis=0)
     box_hi[v] = min(box_hi[v], surface - 0.5 * dp)
@@ -168,8 +193,7 @@ def pack_around_body(fluid: np.ndarray, fixed: np.ndarray, centre: np.ndarray,
         # the fluid up the body's dry side
         np.clip(new, box_lo, box_hi, out=new)
         pos[moving] = new
-    return pos, {"residual_start": res0, "residual": res, "iterations": it,
-                 "n_moving": int(moving.sum()), "n_added": n_added}
+    return res0, res, it
 
 
 def _recount(band_pts: np.ndarray, others: np.ndarray, n_add: int, centre: np.ndarray,

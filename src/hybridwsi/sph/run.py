@@ -20,6 +20,7 @@ import xarray as xr
 
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.history import atomic_write, make_history, to_netcdf
+from hybridwsi.sph.mdbc import body_boundary_post
 from hybridwsi.sph.symmetry import mirror_domain, n_real, reflect_crossers, remove_ghosts
 from hybridwsi.sph.tank import SPHCase, free_surface
 
@@ -54,7 +55,6 @@ def make_equations(case: SPHCase) -> list:
         WallForce,
         WallPressureAdami,
     )
-    from hybridwsi.sph.mdbc import body_boundary_post
 
     gx, gy, gz = case.gvec
     grav = {"gx": gx, "gy": gy, "gz": gz, "t_ramp": case.t_ramp}
@@ -270,6 +270,24 @@ def _set_release(case: SPHCase, t_release: float, tf_after: float) -> None:
 
 
 # --------------------------------------------------------------------------- driver
+def _start(case: SPHCase, solver: Any, ckpt: Path | None, relaxing: bool, tf_after: float
+           ) -> tuple[int, list[dict]]:
+    """Steps done and samples so far: restored from the checkpoint ``ckpt`` when it exists,
+    else a fresh start (the first sample at t = 0, PEC's initial accelerations)."""
+    dt = case.dt
+    if ckpt is not None and ckpt.is_file():
+        count, rows = read_checkpoint(ckpt, case)
+        solver.nnps.update_domain()  # the mirror ghosts of the restored particles
+        if relaxing:  # the release time the interrupted run had chosen (body[B_TREL])
+            _set_release(case, round((case.wall.body[16] + 0.75 * dt) / dt) * dt, tf_after)
+        return count, rows
+    if relaxing:
+        case.fluid.relax[:] = [case.relax_sigma, case.t_release]
+    # PEC uses the accelerations of the previous evaluation in its predictor
+    solver.integrator.initial_acceleration(0.0, dt)
+    return 0, [_sample(case, 0.0)]
+
+
 def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
              checkpoint: str | os.PathLike | None = None, checkpoint_every: float = 120.0,
              resume: bool = False, progress: bool = True, openmp: bool = False,
@@ -305,20 +323,9 @@ def run_case(case: SPHCase, out: str | os.PathLike | None = None, *,
     ckpt = Path(checkpoint) if checkpoint is not None else None
     solver = make_solver(case, openmp=openmp)
     integ = solver.integrator
-    count, rows = 0, []
     relaxing = case.relax_urms > 0.0 and case.t_release > 0.0
     tf_after = case.tf - case.t_release
-    if resume and ckpt is not None and ckpt.is_file():
-        count, rows = read_checkpoint(ckpt, case)
-        solver.nnps.update_domain()  # the mirror ghosts of the restored particles
-        if relaxing:  # the release time the interrupted run had chosen (body[B_TREL])
-            _set_release(case, round((case.wall.body[16] + 0.75 * dt) / dt) * dt, tf_after)
-    else:
-        if relaxing:
-            case.fluid.relax[:] = [case.relax_sigma, case.t_release]
-        # PEC uses the accelerations of the previous evaluation in its predictor
-        integ.initial_acceleration(0.0, dt)
-        rows = [_sample(case, 0.0)]
+    count, rows = _start(case, solver, ckpt if resume else None, relaxing, tf_after)
     n_total = round(case.tf / dt)
     last_ckpt = _time.monotonic()
     bar = tqdm(total=n_total, initial=count, disable=not progress, unit="step",

@@ -17,6 +17,7 @@ import numpy as np
 
 from hybridwsi.bodies import cap_volume
 from hybridwsi.sph import tank
+from hybridwsi.sph.run import run_case
 
 #: heights [m] at which the sphere is held (0.1 D above and below equilibrium)
 HEIGHTS = (-0.03, 0.0, 0.03)
@@ -52,8 +53,6 @@ def held_force(dp: float, z: float, *, depth: float = 0.45, half_width: float = 
     ``relax=0`` the fluid settles undamped for ``settle``. ``case_kw`` go to
     :func:`hybridwsi.sph.tank.decay3d` (e.g. ``hdx``, ``boundary``, ``packing``; the default
     packing is the body cases', packed)."""
-    from hybridwsi.sph.run import run_case
-
     kw = dict(dp=dp, depth=depth, half_width=half_width, free=False,
               z0_over_d=z / tank.SPHERE_D, domain=domain, symmetry=symmetry, **case_kw)
     t_avg = n_periods * acoustic_period(tank.decay3d(tf=0.01, t_release=0.0, **kw))

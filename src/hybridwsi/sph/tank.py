@@ -21,6 +21,8 @@ import numpy as np
 from hybridwsi.bodies import cap_volume
 from hybridwsi.errors import InputError
 from hybridwsi.sph import wavemaker
+from hybridwsi.sph.mdbc import wendland_quintic
+from hybridwsi.sph.packing import pack_around_body
 
 RHO_WATER = 998.2
 G = 9.81
@@ -307,8 +309,6 @@ def _c0(g: float, height: float, factor: float) -> float:
 # --------------------------------------------------------------------------- probes
 def _wendland_quintic(r: np.ndarray, h: np.ndarray, dim: int) -> np.ndarray:
     """Wendland quintic kernel W(r, h) [1/m^dim], the one the solver uses (support 2h)."""
-    from hybridwsi.sph.mdbc import wendland_quintic
-
     return wendland_quintic(r, h, dim)[0]
 
 
@@ -557,18 +557,18 @@ def _flume(name: str, dim: int, dp: float, depth: float, period: float, height: 
     return case
 
 
-def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass: float,
-               z0: float, half_width: float, tf: float, g: float, c0_factor: float,
-               free: bool, piston: tuple[float, float, float] | None = None,
-               length: float | None = None, x_body: float = 0.0,
-               damping: tuple[float, float, float] = (1e30, 2e30, 0.0),
-               probes: list[tuple[float, float]] | None = None,
-               alpha: float = BODY_ALPHA, alpha_wall: float | None = None,
-               alpha_body: float | None = None, hdx: float = BODY_HDX, t_release: float = 0.0,
-               smooth_body: bool = True, sponge: float = 0.0, domain: str | None = None,
-               symmetry: str = "mirror", boundary: str = "shepard", relax: float = 0.0,
-               packing: str = BODY_PACKING) -> SPHCase:
-    """Half-submerged circle (2D) or sphere (3D) released from z0 [m] above equilibrium.
+@dataclass(frozen=True)
+class BodyCaseSpec:
+    """A half-submerged circle (2D) or sphere (3D) in a tank, released from ``z0`` [m] above
+    equilibrium: what :func:`_body_case` builds (the decay and regular-wave cases).
+
+    Geometry: ``dim`` (2 or 3), particle spacing ``dp`` [m], water ``depth`` [m], body
+    ``radius`` [m] and ``mass`` [kg] (per unit length in 2D) at ``x_body`` [m], side walls at
+    ``half_width`` [m] from its axis, a flume of ``length`` [m] with a ``piston`` (stroke [m],
+    period [s], ramp [s]) at x = 0, a damping zone ``damping`` = (start [m], end [m],
+    strength [1/s]) and wave ``probes`` (x, y) [m]. Run: end time ``tf`` [s] (from the
+    release), gravity ``g`` [m/s^2], speed of sound ``c0_factor`` x the shallow-water speed,
+    the body ``free`` to heave or held.
 
     ``domain`` (3D): ``"quarter"`` (symmetry planes x = 0 and y = 0; the default without a
     paddle), ``"half"`` (plane y = 0; the default with a paddle, which sits at x = 0) or
@@ -599,130 +599,220 @@ def _body_case(name: str, dim: int, dp: float, depth: float, radius: float, mass
     within a few dp of the body relaxed to a body-fitted packing,
     :func:`hybridwsi.sph.packing.pack_around_body`, and every fluid mass rho_i dp^dim from its
     initial density) or ``"lattice"`` (the fluid lattice cut by the body, the runs before
-    issue 15; ``docs/SPH_RUNS.md``)."""
-    _check_boundary(boundary)
-    if packing not in PACKINGS:
-        raise InputError(f"packing must be one of {', '.join(PACKINGS)}, got {packing!r}")
-    if not (math.isfinite(relax) and relax >= 0.0):
-        raise InputError(f"relax must be a non-negative fraction of sqrt(g d), got {relax!r}")
-    if not (math.isfinite(t_release) and t_release >= 0.0):
-        raise InputError(f"t_release must be a non-negative time in s, got {t_release!r}")
-    _check_hdx(hdx)
-    for label, value in (("alpha", alpha), ("alpha_wall", alpha_wall),
-                         ("alpha_body", alpha_body)):
-        if value is not None and not (math.isfinite(value) and 0.0 <= value <= 1.0):
-            raise InputError(f"{label} must be in [0, 1], got {value!r}")
-    _check_dp(dp, radius)
-    if not (math.isfinite(sponge) and 0.0 <= sponge <= half_width - radius - 4 * dp):
-        raise InputError(f"sponge must be between 0 and the clear width {half_width - radius:.3g}"
-                         f" m less 4 dp, got {sponge!r}")
-    if sponge > 0.0:
-        if piston is not None:
+    issue 15; ``docs/SPH_RUNS.md``).
+    """
+
+    name: str
+    dim: int
+    dp: float
+    depth: float
+    radius: float
+    mass: float
+    z0: float
+    half_width: float
+    tf: float
+    g: float
+    c0_factor: float
+    free: bool
+    piston: tuple[float, float, float] | None = None
+    length: float | None = None
+    x_body: float = 0.0
+    damping: tuple[float, float, float] = (1e30, 2e30, 0.0)
+    probes: tuple[tuple[float, float], ...] = ()
+    alpha: float = BODY_ALPHA
+    alpha_wall: float | None = None
+    alpha_body: float | None = None
+    hdx: float = BODY_HDX
+    t_release: float = 0.0
+    smooth_body: bool = True
+    sponge: float = 0.0
+    domain: str | None = None
+    symmetry: str = "mirror"
+    boundary: str = "shepard"
+    relax: float = 0.0
+    packing: str = BODY_PACKING
+
+    def check(self) -> None:
+        """:class:`InputError` on the first value out of range."""
+        _check_boundary(self.boundary)
+        if self.packing not in PACKINGS:
+            raise InputError(f"packing must be one of {', '.join(PACKINGS)}, "
+                             f"got {self.packing!r}")
+        if not (math.isfinite(self.relax) and self.relax >= 0.0):
+            raise InputError("relax must be a non-negative fraction of sqrt(g d), "
+                             f"got {self.relax!r}")
+        if not (math.isfinite(self.t_release) and self.t_release >= 0.0):
+            raise InputError(f"t_release must be a non-negative time in s, got {self.t_release!r}")
+        _check_hdx(self.hdx)
+        for label in ("alpha", "alpha_wall", "alpha_body"):
+            value = getattr(self, label)
+            if value is not None and not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise InputError(f"{label} must be in [0, 1], got {value!r}")
+        _check_dp(self.dp, self.radius)
+        clear = self.half_width - self.radius
+        if not (math.isfinite(self.sponge) and 0.0 <= self.sponge <= clear - 4 * self.dp):
+            raise InputError(f"sponge must be between 0 and the clear width {clear:.3g} m less "
+                             f"4 dp, got {self.sponge!r}")
+        if self.sponge > 0.0 and self.piston is not None:
             raise InputError("a sponge along the side walls is for decay cases (no paddle)")
-        # strength from the heave natural frequency sqrt(C / (m + A)), A ~ m (heave, half
-        # immersed): 3 omega relaxes a wave within the layer (as the flume's beach)
-        c_hyd = RHO_WATER * g * (2.0 * radius if dim == 2 else math.pi * radius ** 2)
-        damping = (half_width - sponge, half_width, 3.0 * math.sqrt(c_hyd / (2.0 * mass)))
-    planes = _symmetry_planes(dim, piston is not None, domain, symmetry)
-    domain = ("full" if dim == 2 else ("half" if piston is not None else "quarter")
-              ) if domain is None else domain
-    rho0 = RHO_WATER
-    c0 = _c0(g, depth, c0_factor)
-    nl = _nlayers(hdx)
-    v = dim - 1
+
+
+@dataclass
+class _BodyTank:
+    """The particles of a body case before they become PySPH arrays: fluid points, solid
+    points (walls, paddle, body) with their flags (0 wall, 1 paddle, 2 body), and the layout."""
+
+    domain: str
+    planes: tuple[int, ...]
+    centre: np.ndarray
+    n_box: int  # fluid lattice points below the surface before the body is cut out
+    fluid: np.ndarray
+    solid: np.ndarray
+    flags: np.ndarray
+    body: np.ndarray
+
+
+def _body_case(p: BodyCaseSpec) -> SPHCase:
+    """The :class:`SPHCase` of a body in a tank (see :class:`BodyCaseSpec`)."""
+    p.check()
+    tank = _body_tank(p)
+    rho0, c0 = RHO_WATER, _c0(p.g, p.depth, p.c0_factor)
+    fl, vol_solid, packing_info = tank.fluid, None, {}
+    if p.packing == "packed":
+        fl, vol_solid, packing_info = _pack_fluid(p, tank)
+    fluid, wall = _arrays(p.dim, fl, tank.solid, tank.flags, p.dp, p.hdx * p.dp, rho0, c0, 7.0,
+                          p.g, p.depth, hydrostatic=True, consistent_mass=(p.packing == "packed"))
+    if vol_solid is not None:
+        wall.m[:] = rho0 * vol_solid
+    _set_body(p, tank, wall)
+    mirror = tank.planes if p.symmetry == "mirror" else ()
+    case = SPHCase(p.name, p.dim, p.dp, p.depth, p.tf, fluid, wall, rho0=rho0, c0=c0, g=p.g,
+                   hdx=p.hdx, body_mass=p.mass, damping=_damping(p), probes=list(p.probes),
+                   output_dt=0.005, alpha=p.alpha, alpha_wall=p.alpha_wall,
+                   alpha_body=p.alpha_body, damping_radial=p.sponge > 0.0, mirror=mirror,
+                   boundary=p.boundary, packing=p.packing, packing_info=packing_info)
+    rest = tank.centre.copy()
+    rest[p.dim - 1] = p.depth  # the stepper places the body at its equilibrium + body[B_Z]
+    case.body_surface = (tuple(float(c) for c in rest), float(p.radius))
+    _set_release(p, case, wall)
+    return case
+
+
+def _damping(p: BodyCaseSpec) -> tuple[float, float, float]:
+    """The damping zone: the spec's, or with a ``sponge`` a layer along the side walls."""
+    if p.sponge <= 0.0:
+        return p.damping
+    # strength from the heave natural frequency sqrt(C / (m + A)), A ~ m (heave, half
+    # immersed): 3 omega relaxes a wave within the layer (as the flume's beach)
+    c_hyd = RHO_WATER * p.g * (2.0 * p.radius if p.dim == 2 else math.pi * p.radius ** 2)
+    return (p.half_width - p.sponge, p.half_width, 3.0 * math.sqrt(c_hyd / (2.0 * p.mass)))
+
+
+def _body_tank(p: BodyCaseSpec) -> _BodyTank:
+    """Fluid, walls, paddle and body particles on one lattice (so that the gap between fluid
+    and body is one dp, as at flat walls)."""
+    dim, dp, v = p.dim, p.dp, p.dim - 1
+    planes = _symmetry_planes(dim, p.piston is not None, p.domain, p.symmetry)
+    domain = p.domain or ("full" if dim == 2 else ("half" if p.piston is not None
+                                                      else "quarter"))
+    nl = _nlayers(p.hdx)
     # horizontal extent: x in [x_lo, x_hi], y in [y_lo, half_width] (3D)
-    if piston is None:
-        x_lo, x_hi = (0.0 if domain == "quarter" else -half_width), half_width
+    if p.piston is None:
+        x_lo, x_hi = (0.0 if domain == "quarter" else -p.half_width), p.half_width
         open_sides: tuple[int, ...] = ()
     else:
-        x_lo, x_hi = 0.0, float(length)
+        x_lo, x_hi = 0.0, float(p.length)
         open_sides = (0,)
-    y_lo = -half_width if domain == "full" else 0.0
-    if symmetry == "mirror":
+    y_lo = -p.half_width if domain == "full" else 0.0
+    if p.symmetry == "mirror":
         # no wall on a mirror plane: its ghosts stand in for the fluid and solids beyond it
         open_sides += tuple(2 * ax for ax in planes if 2 * ax not in open_sides)
     lo = [x_lo] + ([y_lo] if dim == 3 else []) + [0.0]
-    hi = [x_hi] + ([half_width] if dim == 3 else []) + [depth]
-    top = depth + radius + 4 * dp
+    top = p.depth + p.radius + 4 * dp
+    hi = [x_hi] + ([p.half_width] if dim == 3 else []) + [top]
     centre = np.zeros(dim)
-    centre[0] = x_body
-    centre[v] = depth + z0  # released z0 above equilibrium (half submerged)
-    # one lattice for fluid and body so that the gap between them is one dp, as at flat walls
-    hi_all = list(hi)
-    hi_all[-1] = top
-    pts_all = _grid(lo, hi_all, dp)
+    centre[0] = p.x_body
+    centre[v] = p.depth + p.z0  # released z0 above equilibrium (half submerged)
+    pts_all = _grid(lo, hi, dp)
     r = np.linalg.norm(pts_all - centre, axis=1)
-    fl = pts_all[(r >= radius) & (pts_all[:, v] < depth)]
+    fl = pts_all[(r >= p.radius) & (pts_all[:, v] < p.depth)]
     # body: a shell nl particles thick (inner particles never see the fluid)
-    if smooth_body:
-        body = round_shell(centre, radius, dp, nl, quarter=(domain == "quarter"),
-                           half=(domain == "half"), mirrored=(symmetry == "mirror"))
+    if p.smooth_body:
+        body = round_shell(centre, p.radius, dp, nl, quarter=(domain == "quarter"),
+                           half=(domain == "half"), mirrored=(p.symmetry == "mirror"))
     else:
-        body = pts_all[(r < radius) & (r >= radius - (nl + 0.5) * dp)]
-    wlo, whi = list(lo), list(hi)
-    whi[-1] = top
-    if piston is not None:
-        wlo[0] = -(0.5 * piston[0] + 2 * dp)
-    walls = _tank_walls(wlo, whi, dp, nl, open_sides=open_sides)
-    if piston is not None:
-        walls = walls[walls[:, 0] > wlo[0]]
-        plo = [-nl * dp] + ([y_lo] if dim == 3 else []) + [0.0]
-        phi = [0.0] + ([half_width] if dim == 3 else []) + [top]
-        paddle = _grid(plo, phi, dp)
-    else:
-        paddle = np.zeros((0, dim))
-    pts = np.vstack([walls, paddle, body])
-    flags = np.r_[np.zeros(len(walls)), np.ones(len(paddle)), np.full(len(body), 2.0)]
-    packing_info: dict[str, float] = {}
-    if packing == "packed":
-        from hybridwsi.sph.packing import pack_around_body
+        body = pts_all[(r < p.radius) & (r >= p.radius - (nl + 0.5) * dp)]
+    walls, paddle = _walls_and_paddle(p, lo, hi, nl, open_sides, y_lo)
+    return _BodyTank(domain=domain, planes=planes, centre=centre,
+                     n_box=int(np.sum(pts_all[:, v] < p.depth)), fluid=fl,
+                     solid=np.vstack([walls, paddle, body]),
+                     flags=np.r_[np.zeros(len(walls)), np.ones(len(paddle)),
+                                 np.full(len(body), 2.0)],
+                     body=body)
 
-        # the body's shell particles carry their layer's volume (a few % off dp^dim)
-        vol_solid = np.full(len(pts), dp ** dim)
-        if smooth_body:
-            vol_solid[flags == 2] = shell_volumes(body, centre, radius, dp, domain)
-        fl, packing_info = pack_around_body(
-            fl, pts, centre, radius, dp, hdx * dp, surface=depth,
-            mirror_axes=planes if symmetry == "mirror" else (),
-            n_total=_fluid_count(int(np.sum(pts_all[:, v] < depth)), dp, radius, z0, dim,
-                                 domain),
-            fixed_volumes=vol_solid)
-    fluid, wall = _arrays(dim, fl, pts, flags, dp, hdx * dp, rho0, c0, 7.0, g, depth,
-                          hydrostatic=True, consistent_mass=(packing == "packed"))
-    if packing == "packed":
-        wall.m[:] = rho0 * vol_solid
-    scale = {"full": 1.0, "half": 2.0, "quarter": 4.0}[domain]
+
+def _walls_and_paddle(p: BodyCaseSpec, lo: list[float], hi: list[float], nl: int,
+                      open_sides: tuple[int, ...], y_lo: float) -> tuple[np.ndarray, np.ndarray]:
+    """The tank's wall particles up to ``hi`` (the top of the body's lattice) and the
+    paddle's (none without a piston: an empty (0, dim) array)."""
+    wlo = list(lo)
+    if p.piston is not None:
+        wlo[0] = -(0.5 * p.piston[0] + 2 * p.dp)
+    walls = _tank_walls(wlo, hi, p.dp, nl, open_sides=open_sides)
+    if p.piston is None:
+        return walls, np.zeros((0, p.dim))
+    walls = walls[walls[:, 0] > wlo[0]]
+    plo = [-nl * p.dp] + ([y_lo] if p.dim == 3 else []) + [0.0]
+    phi = [0.0] + ([p.half_width] if p.dim == 3 else []) + [hi[-1]]
+    return walls, _grid(plo, phi, p.dp)
+
+
+def _pack_fluid(p: BodyCaseSpec, tank: _BodyTank
+                ) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """The fluid relaxed to a body-fitted packing, the solid particles' volumes [m^dim] and
+    the packing's report (:func:`hybridwsi.sph.packing.pack_around_body`)."""
+    # the body's shell particles carry their layer's volume (a few % off dp^dim)
+    vol_solid = np.full(len(tank.solid), p.dp ** p.dim)
+    if p.smooth_body:
+        vol_solid[tank.flags == 2] = shell_volumes(tank.body, tank.centre, p.radius, p.dp,
+                                                   tank.domain)
+    fl, info = pack_around_body(
+        tank.fluid, tank.solid, tank.centre, p.radius, p.dp, p.hdx * p.dp, surface=p.depth,
+        mirror_axes=tank.planes if p.symmetry == "mirror" else (),
+        n_total=_fluid_count(tank.n_box, p.dp, p.radius, p.z0, p.dim, tank.domain),
+        fixed_volumes=vol_solid)
+    return fl, vol_solid, info
+
+
+def _set_body(p: BodyCaseSpec, tank: _BodyTank, wall: Any) -> None:
+    """The body's state in the wall array: drop, mass, symmetry scale, free flag, the planes
+    built as walls, the particles' equilibrium positions and the paddle's motion."""
+    scale = {"full": 1.0, "half": 2.0, "quarter": 4.0}[tank.domain]
     b = wall.body
     # whole-body mass [kg]; BodyForceReduce scales the simulated part's force up by ``scale``
-    b[0], b[7], b[8], b[9] = z0, mass, scale, 1.0 if free else 0.0
+    b[0], b[7], b[8], b[9] = p.z0, p.mass, scale, 1.0 if p.free else 0.0
     # planes built as walls: WallForce adds the images of the fluid to the body force itself
     # (bit 1 -> x = 0, bit 2 -> y = 0); mirror planes have real ghosts instead
-    b[15] = 0.0 if symmetry == "mirror" else float(sum(1 << ax for ax in planes))
+    b[15] = 0.0 if p.symmetry == "mirror" else float(sum(1 << ax for ax in tank.planes))
     # equilibrium positions (the stepper places body particles at xi + z e_v)
-    (wall.yi, wall.zi)[v - 1][flags == 2] -= z0
-    if piston is not None:
-        wall.piston[3:6] = piston
-    case = SPHCase(name, dim, dp, depth, tf, fluid, wall, rho0=rho0, c0=c0, g=g,
-                   hdx=hdx, body_mass=mass, damping=damping, probes=probes or [],
-                   output_dt=0.005, alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body,
-                   damping_radial=sponge > 0.0,
-                   mirror=planes if symmetry == "mirror" else (), boundary=boundary,
-                   packing=packing, packing_info=packing_info)
-    rest = centre.copy()
-    rest[v] = depth  # the stepper places the body at its equilibrium position + body[B_Z]
-    case.body_surface = (tuple(float(c) for c in rest), float(radius))
-    if relax > 0.0:
-        case.relax_urms = relax * math.sqrt(g * depth)
-        case.relax_sigma = math.pi * c0 / (4.0 * depth)
-        case.relax_tmin = 4.0 * depth / c0
-    if t_release > 0.0:
+    (wall.yi, wall.zi)[p.dim - 2][tank.flags == 2] -= p.z0
+    if p.piston is not None:
+        wall.piston[3:6] = p.piston
+
+
+def _set_release(p: BodyCaseSpec, case: SPHCase, wall: Any) -> None:
+    """The hold before the release (fixed, or a damped relaxation with ``relax``)."""
+    if p.relax > 0.0:
+        case.relax_urms = p.relax * math.sqrt(p.g * p.depth)
+        case.relax_sigma = math.pi * case.c0 / (4.0 * p.depth)
+        case.relax_tmin = 4.0 * p.depth / case.c0
+    if p.t_release > 0.0:
         # release on an output sample; PEC evaluates forces at mid-step, so the body is free
         # from the evaluation half a step before it and the first sample has m zddot = F_tot
         every = max(1, round(case.output_dt / case.dt)) * case.dt
-        case.t_release = max(1, round(t_release / every)) * every
-        case.tf = tf + case.t_release
-        b[16] = case.t_release - 0.75 * case.dt
-    return case
+        case.t_release = max(1, round(p.t_release / every)) * every
+        case.tf = p.tf + case.t_release
+        wall.body[16] = case.t_release - 0.75 * case.dt
 
 
 def _fluid_count(n_box: int, dp: float, radius: float, z0: float, dim: int, domain: str
@@ -748,10 +838,11 @@ def decay2d(dp: float = 0.02, radius: float = 0.15, depth: float = 0.6, z0_over_
             relax: float = BODY_RELAX, packing: str = BODY_PACKING) -> SPHCase:
     """2D heave decay of a half-submerged circle (mass per unit length rho pi R^2 / 2)."""
     mass = RHO_WATER * math.pi * radius ** 2 / 2.0
-    case = _body_case("decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius,
-                      half_width, tf, G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall,
-                      alpha_body=alpha_body, hdx=hdx, t_release=t_release, smooth_body=smooth_body,
-                      sponge=sponge, boundary=boundary, relax=relax, packing=packing)
+    case = _body_case(BodyCaseSpec(
+        "decay2d", 2, dp, depth, radius, mass, z0_over_d * 2 * radius, half_width, tf, G,
+        c0_factor, free, alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body, hdx=hdx,
+        t_release=t_release, smooth_body=smooth_body, sponge=sponge, boundary=boundary,
+        relax=relax, packing=packing))
     case.inputs = {"case": "decay2d", "dp": dp, "radius": radius, "depth": depth, "z0_over_d": z0_over_d,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "mass_per_length": mass, "alpha": alpha, "alpha_wall": alpha_wall,
@@ -775,12 +866,11 @@ def decay3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, half_width: float = 1
     (true mirror planes, default) or ``"wall"`` (planes as fixed walls, the former set-up).
     The default ``tf`` [s] runs a little past 5 Te0 so the sampled record covers the RMS
     window."""
-    case = _body_case("decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS,
-                      z0_over_d * SPHERE_D, half_width, tf, KRAMER_G, c0_factor, free,
-                      alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body, hdx=hdx,
-                      t_release=t_release,
-                      smooth_body=smooth_body, sponge=sponge, domain=domain,
-                      symmetry=symmetry, boundary=boundary, relax=relax, packing=packing)
+    case = _body_case(BodyCaseSpec(
+        "decay3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS, z0_over_d * SPHERE_D, half_width, tf,
+        KRAMER_G, c0_factor, free, alpha=alpha, alpha_wall=alpha_wall, alpha_body=alpha_body,
+        hdx=hdx, t_release=t_release, smooth_body=smooth_body, sponge=sponge, domain=domain,
+        symmetry=symmetry, boundary=boundary, relax=relax, packing=packing))
     case.inputs = {"case": "decay3d", "dp": dp, "depth": depth, "half_width": half_width,
                        "z0_over_d": z0_over_d, "tf": tf, "c0_factor": c0_factor, "free": free,
                        "diameter": SPHERE_D, "mass": SPHERE_MASS, "g": KRAMER_G, "alpha": alpha,
@@ -818,13 +908,12 @@ def regular3d(dp: float = 0.03, depth: float = KRAMER_DEPTH, period: float = 0.7
     length = 4.0 * lam
     x_body = 2.0 * lam
     probes = [(x_body - lam, 0.5 * dp), (x_body - 0.5 * lam, 0.5 * half_width)]
-    case = _body_case("regular3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS, 0.0, half_width,
-                      tf, g, c0_factor, True, piston=(stroke, period, 2 * period),
-                      length=length, x_body=x_body,
-                      damping=(length - lam, length, 3.0 * 2 * math.pi / period),
-                      probes=probes, alpha=alpha, alpha_body=alpha_body, hdx=hdx,
-                      smooth_body=smooth_body,
-                      domain=domain, symmetry=symmetry, boundary=boundary, packing=packing)
+    case = _body_case(BodyCaseSpec(
+        "regular3d", 3, dp, depth, SPHERE_D / 2, SPHERE_MASS, 0.0, half_width, tf, g, c0_factor,
+        True, piston=(stroke, period, 2 * period), length=length, x_body=x_body,
+        damping=(length - lam, length, 3.0 * 2 * math.pi / period), probes=tuple(probes),
+        alpha=alpha, alpha_body=alpha_body, hdx=hdx, smooth_body=smooth_body, domain=domain,
+        symmetry=symmetry, boundary=boundary, packing=packing))
     case.inputs = {"case": "regular3d", "dp": dp, "depth": depth, "period": period, "height": height,
                        "half_width": half_width, "tf": tf, "c0_factor": c0_factor, "stroke": stroke,
                        "wavelength": lam, "x_body": x_body, "alpha": alpha, "hdx": hdx,

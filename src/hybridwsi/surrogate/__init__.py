@@ -8,5 +8,9 @@ in the loop. Modules import torch lazily through :mod:`~hybridwsi.surrogate.netw
   with the stability check before running;
 - :mod:`~hybridwsi.surrogate.fast` — folded NumPy network and the compiled (Numba) loop of
   the lagged/corrected rollout;
-- :mod:`~hybridwsi.surrogate.demo` — which partition may a network take over (issue 6).
+- :mod:`~hybridwsi.surrogate.demo` — which partition may a network take over (issue 6);
+- :mod:`~hybridwsi.surrogate.kramer` — the hybrid on the Kramer decay measurements, leave one
+  drop out (its structured residual in :mod:`~hybridwsi.surrogate.structured`, its multi-step
+  training in :mod:`~hybridwsi.surrogate.multistep`);
+- :mod:`~hybridwsi.surrogate.fowt` — the OC3-Hywind multi-DOF diagnostic and 3-DOF hybrid.
 """

@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
+from hybridwsi.files import read_netcdf
 from hybridwsi.hydro.formats import bemio, capytaine_nc, wamit
 from hybridwsi.hydro.formats.common import SEAWATER
 
@@ -56,8 +57,6 @@ def detect(path: str | Path) -> str:
 
 
 def _netcdf(path: Path, fmt: str) -> xr.Dataset:
-    from hybridwsi.files import read_netcdf
-
     ds = read_netcdf(path)
     if capytaine_nc.is_capytaine(ds) or fmt == "capytaine":
         return capytaine_nc.from_dataset(ds, path)

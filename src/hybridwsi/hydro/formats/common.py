@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import __version__
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, force_unit, is_rotation
 from hybridwsi.errors import InputError
 from hybridwsi.hydro.coefficients import PAIR, pair_units_attr
@@ -71,6 +72,39 @@ def _finite(name: str, arr: np.ndarray | None, where: str) -> None:
         raise InputError(f"{where}: '{name}' contains NaN/inf")
 
 
+def _checked_frequencies(omega: np.ndarray, where: str) -> np.ndarray:
+    """The frequencies [rad/s] as floats: a non-empty list of finite, positive, distinct
+    values, else :class:`InputError` naming ``where``."""
+    omega = np.asarray(omega, dtype=float)
+    if omega.ndim != 1 or omega.size == 0:
+        raise InputError(f"{where}: no finite frequency in the file")
+    if not np.all(np.isfinite(omega) & (omega > 0)):
+        raise InputError(f"{where}: frequencies must be finite and positive")
+    srt = np.sort(omega)
+    if np.any(np.diff(srt) == 0):
+        raise InputError(f"{where}: repeated frequency {srt[1:][np.diff(srt) == 0][0]:.6g} rad/s")
+    return omega
+
+
+def _with_excitation(ds: xr.Dataset, excitation: np.ndarray, directions: np.ndarray | None,
+                     order: np.ndarray, where: str) -> xr.Dataset:
+    """``ds`` with the excitation force (n_ω, n_β, n) [N/m, N m/m] in frequency ``order`` and
+    its wave directions [rad]."""
+    exc = np.asarray(excitation, dtype=complex)
+    directions = np.asarray(directions, dtype=float)
+    shape = (ds.sizes["omega"], directions.size, ds.sizes["influenced_dof"])
+    if exc.shape != shape:
+        raise InputError(f"{where}: excitation has shape {exc.shape}, expected {shape}")
+    _finite("excitation_force", exc, where)
+    ds = ds.assign_coords(wave_direction=("wave_direction", directions, {"units": "rad"}))
+    dofs = [str(d) for d in ds["influenced_dof"].values]
+    ds["excitation_force"] = (("omega", "wave_direction", "influenced_dof"), exc[order], {
+        "units": excitation_units(dofs),
+        "description": "Froude-Krylov + diffraction per unit wave amplitude at the origin; "
+                       "Capytaine's time convention F(t) = Re[F exp(-i omega t)]"})
+    return ds
+
+
 def build(
     *,
     omega: np.ndarray,
@@ -108,18 +142,9 @@ def build(
     source, input_hash : provenance (``input_hash`` is a content hash of the files).
     where : file name used in error messages.
     """
-    from hybridwsi import __version__
-
     dofs = list(check_dofs(list(dofs)))
     n = len(dofs)
-    omega = np.asarray(omega, dtype=float)
-    if omega.ndim != 1 or omega.size == 0:
-        raise InputError(f"{where}: no finite frequency in the file")
-    if not np.all(np.isfinite(omega) & (omega > 0)):
-        raise InputError(f"{where}: frequencies must be finite and positive")
-    srt = np.sort(omega)
-    if np.any(np.diff(srt) == 0):
-        raise InputError(f"{where}: repeated frequency {srt[1:][np.diff(srt) == 0][0]:.6g} rad/s")
+    omega = _checked_frequencies(omega, where)
     order = np.argsort(omega)
     shapes = {"added_mass": (added_mass, (omega.size, n, n)),
               "radiation_damping": (radiation_damping, (omega.size, n, n))}
@@ -137,17 +162,7 @@ def build(
         ds[name] = (("omega", *PAIR), pair_var(np.asarray(arr)[order]),
                     {"units": pair_units_attr(name, dofs)})
     if excitation is not None:
-        exc = np.asarray(excitation, dtype=complex)
-        directions = np.asarray(directions, dtype=float)
-        if exc.shape != (omega.size, directions.size, n):
-            raise InputError(f"{where}: excitation has shape {exc.shape}, expected "
-                             f"{(omega.size, directions.size, n)}")
-        _finite("excitation_force", exc, where)
-        ds = ds.assign_coords(wave_direction=("wave_direction", directions, {"units": "rad"}))
-        ds["excitation_force"] = (("omega", "wave_direction", "influenced_dof"), exc[order], {
-            "units": excitation_units(dofs),
-            "description": "Froude-Krylov + diffraction per unit wave amplitude at the origin; "
-                           "Capytaine's time convention F(t) = Re[F exp(-i omega t)]"})
+        ds = _with_excitation(ds, excitation, directions, order, where)
     for name, arr, keep_nan in (("added_mass_inf", added_mass_inf, True),
                                 ("added_mass_zero", added_mass_zero, True),
                                 ("hydrostatic_stiffness", hydrostatic_stiffness, False),

@@ -54,6 +54,7 @@ import xarray as xr
 
 from hybridwsi.dofs import RIGID_DOFS
 from hybridwsi.errors import InputError
+from hybridwsi.files import atomic_write
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.hydro.formats.common import build, content_hash, mode_dof, n_rotations, positive
 
@@ -328,8 +329,6 @@ def write(coeffs: xr.Dataset, root: str | Path, *, ulen: float = 1.0) -> list[Pa
     list of pathlib.Path
         The three files written.
     """
-    from hybridwsi.files import atomic_write
-
     ulen = positive(ulen, "ulen")
     rho = positive(coeffs.attrs.get("rho"), "coefficients attrs 'rho'")
     g = positive(coeffs.attrs.get("g"), "coefficients attrs 'g'")

@@ -1,0 +1,99 @@
+"""The shipped results of the hybrid on the MoorDyn-coupled OC3-Hywind reference (issue 29
+items 5-6; ``scripts/oc3_moordyn_hybrid.py``): the metrics the report shows are the ones the
+shipped series give, recomputed here by the module and independently (plain NumPy, an FFT
+low-pass instead of Welch's spectrum); the done-means criteria on the shipped numbers; the
+report section built from the file alone (no MoorDyn run)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridwsi.report import fowt_moordyn_hybrid as fmh
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return fmh.load_shipped()
+
+
+def test_files_small_and_with_provenance(shipped):
+    res, ds = shipped
+    for suffix in (".json", ".nc"):
+        assert fmh.SHIPPED.with_suffix(suffix).stat().st_size < 2e6
+    assert res["provenance"]["hybridwsi"] and "moordyn" in res["provenance"]
+    assert "scripts/oc3_moordyn_hybrid.py" in res["command"]
+    assert list(ds["model"].values) == list(fmh.MODELS)
+    assert set(ds["sea"].values) == set(res["held_out"]) and len(res["held_out"]) >= 2
+
+
+def test_metrics_recomputed_from_the_series(shipped):
+    """The JSON (what the report's table prints) is what the shipped series give (float32
+    storage of the series: 1e-4 relative on the errors, 1e-6 on the statistics)."""
+    res, ds = shipped
+    for sea, want in res["held_out"].items():
+        got = fmh.metrics(fmh.sea_series(ds, sea))
+        assert got["most_loaded_line"] == want["most_loaded_line"]
+        for model in fmh.MODELS:
+            for var, st in want["stats"][model].items():
+                for k, v in st.items():
+                    assert got["stats"][model][var][k] == pytest.approx(v, rel=1e-6, abs=1e-9)
+        for model, errs in want["errors"].items():
+            for var, e in errs.items():
+                if var == "low_energy":
+                    assert got["errors"][model][var] == pytest.approx(e, abs=1e-4)
+                    continue
+                for k, v in e.items():
+                    assert got["errors"][model][var][k] == pytest.approx(v, rel=1e-3)
+
+
+def _lowpass_variance(x: np.ndarray, dt: float, omega: float) -> float:
+    """Variance of ``x`` below ``omega`` [rad/s] by an FFT low-pass (not Welch)."""
+    spec = np.fft.rfft(x - x.mean())
+    w = 2.0 * np.pi * np.fft.rfftfreq(x.size, dt)
+    spec[w > omega] = 0.0
+    return float(np.var(np.fft.irfft(spec, x.size)))
+
+
+def test_errors_independently(shipped):
+    """RMS errors in plain NumPy, and the slow-drift band energy by an FFT low-pass: the
+    hybrid's ratio to the reference agrees with the Welch estimate within 5 points."""
+    res, ds = shipped
+    for sea, want in res["held_out"].items():
+        one = fmh.sea_series(ds, sea)
+        dt = float(np.diff(one["time"].values[:2])[0])
+        ref = {k: one[k].sel(model="moordyn").values.astype(float) for k in ("surge", "pitch")}
+        for model in fmh.PARTITIONS:
+            hyb = {k: one[k].sel(model=model).values.astype(float) for k in ("surge", "pitch")}
+            for k in ref:
+                e = np.sqrt(np.sum((hyb[k] - ref[k]) ** 2) / np.sum(ref[k] ** 2))
+                assert e == pytest.approx(want["errors"][model][k]["nrms"], rel=1e-3)
+            ratio = (_lowpass_variance(hyb["surge"], dt, fmh.LOW_OMEGA)
+                     / _lowpass_variance(ref["surge"], dt, fmh.LOW_OMEGA) - 1.0)
+            assert ratio == pytest.approx(want["errors"][model]["low_energy"], abs=0.05)
+
+
+def test_done_means_on_the_shipped_results(shipped):
+    """Issue 29: hybrid vs the MoorDyn-coupled reference in >= 2 held-out seas: RMS error
+    <= 3 % surge and pitch, <= 5 % on the most loaded line's fairlead tension, the surge
+    energy below 0.1 rad/s within 10 %; predicted stable and bounded over 3 hours."""
+    res, _ = shipped
+    for sea, m in res["held_out"].items():
+        for k in fmh.PARTITIONS:
+            e = m["errors"][k]
+            assert e["surge"]["nrms"] <= 0.03 and e["pitch"]["nrms"] <= 0.03, (sea, k)
+            assert e["tension"]["nrms"] <= 0.05, (sea, k)
+            assert abs(e["low_energy"]) <= 0.10, (sea, k)
+    for k in fmh.PARTITIONS:
+        long = res["long"][k]
+        assert res["prediction"][k]["stable"] and long["finite"], k
+        assert long["duration"] >= 10800.0 - 1.0
+        for hour in long["hours"]:  # bounded: the hybrid's spread near the quasi-static run's
+            for d, v in hour.items():
+                assert 0.5 < v["std"] / v["std_table"] < 1.5, (k, d)
+
+
+def test_report_section_from_the_file(tmp_path):
+    text = fmh.report_section(tmp_path)
+    assert all(f"| {fmh.LABELS[k]} |" in text for k in fmh.MODELS)
+    assert (tmp_path / "moordyn_hybrid_spectra.png").stat().st_size > 10_000
