@@ -20,9 +20,10 @@ of the wall time (``time.perf_counter``):
   at Δt, ~4 s for OC3), what ``simulate --case`` and ``simulate --case --network`` do after
   the interpreter has started (its imports, ~1.5 s of CPU, are left out of both).
 
-Measured 2026-12-05 (2 shared cores, load 2.9-3.7): linear 0.223 s [0.216, 0.247], hybrid
-0.098 s [0.089, 0.101] (2.7 us/step, 36 900x real time, 0.44x the linear run); from the case
-2.29 s and 1.93 s (1870x real time, 0.84x). Before ``CertifiedModel.simulate`` reused the case
+Measured 2026-12-05 (2 shared cores, load 1.8-2.0): linear 0.137 s [0.136, 0.139], hybrid
+0.061 s [0.059, 0.064] (1.7 us/step, 59 000x real time, 0.44x the linear run); from the case
+1.23 s and 1.37 s (2630x real time, 1.11x). At load 2.9-3.7: 0.223 / 0.098 s (0.44x), from
+the case 2.29 / 1.93 s (0.84x, 1870x). Before ``CertifiedModel.simulate`` reused the case
 model's radiation state space it refitted it per run: hybrid 9.1 s vs linear 1.0 s under load
 9 (9x, 394x real time). As processes (``/usr/bin/time``, interpreter start and imports
 included, torch ~1.5 s, the command parser ~2.3 s): ``simulate --case my_spar.toml --network``
