@@ -177,37 +177,80 @@ def test_training_refuses_histories_lacking_what_the_partition_needs(sphere, tmp
     assert "F_exc" in line and str(bare) in line
 
 
-def test_histories_with_eta_alone_train(sphere, tmp_path):
-    """Motions and η only (a tank record): F_exc from η through the case's transfer function,
-    F_tot = M z̈; the excitation so computed matches the simulation's harmonic sum."""
+def _stripped(src, dst):
+    """A history reduced to time, z, zdot, zddot and eta with their units alone: no file
+    attribute (no ramp, no case, no radiation fit), as a record exported from elsewhere."""
+    h = read_netcdf(src)[["z", "zdot", "zddot", "eta"]]
+    h.attrs = {}
+    for v in h.variables.values():
+        v.attrs = {k: a for k, a in v.attrs.items() if k in ("units", "units_per_dof")}
+    h.to_netcdf(dst)
+    return str(dst)
+
+
+def test_histories_with_eta_alone_train_and_run(sphere, tmp_path):
+    """Motions and η only, no attributes: F_exc from η through the case's transfer function,
+    F_tot = M z̈. The stored η is the elevation as applied (ramped like the force), so the
+    excitation computed from it is the force the run applied, over the ramp too (before η was
+    stored ramped, the stripped history lost the ramp: F_exc from it was ~100 % off over the
+    first ramp, and on OC3 the network was refused as unstable, spectral radius 1.0002)."""
     from hybridwsi.casemodel import CaseModel
     from hybridwsi.surrogate.certified import prepare_histories
 
-    names = []
-    for k in (1, 2):
-        h = read_netcdf(sphere / f"s{k}.nc")
-        r = h[["z", "zdot", "zddot", "eta"]]
-        r.attrs = {}
-        names.append(str(tmp_path / f"r{k}.nc"))
-        to_netcdf(r, names[-1])
+    names = [_stripped(sphere / f"s{k}.nc", tmp_path / f"r{k}.nc") for k in (1, 2)]
     model = CaseModel.build("paper_sphere", dofs=["Heave"])
     full = read_netcdf(sphere / "s1.nc")
-    got = prepare_histories([read_netcdf(names[0])], names[:1], model)[0]
+    got = prepare_histories([xr.load_dataset(names[0])], names[:1], model)[0]
     t = full["time"].values
-    inner = (t > 4.0) & (t < 8.0)  # past the 3 s ramp the record lacks; before its end
-    f, f_ref = got["F_exc"].values[inner, 0], full["F_exc"].values[inner, 0]
-    assert np.sqrt(np.mean((f - f_ref) ** 2)) < 0.02 * np.sqrt(np.mean(f_ref ** 2))
+    f, f_ref = got["F_exc"].values[:, 0], full["F_exc"].values[:, 0]
+    scale = np.sqrt(np.mean(f_ref ** 2))
+    # the default ramp is two peak periods (1.6 s), about the impulse response's spread: the
+    # excitation of the ramped η differs from the ramped excitation there (measured 14 % of
+    # the force's RMS over the ramp; 33 % from an unramped η), not after it; the last 2 s
+    # feel the calm after the record's end
+    ramp, after = t < 1.6, (t >= 1.6) & (t < 8.0)
+    assert np.sqrt(np.mean((f[ramp] - f_ref[ramp]) ** 2)) < 0.2 * scale
+    assert np.sqrt(np.mean((f[after] - f_ref[after]) ** 2)) < 0.01 * scale
     np.testing.assert_allclose(got["F_tot"].values, full["F_tot"].values,
                                rtol=1e-9, atol=1e-9 * np.abs(full["F_tot"].values).max())
     out = tmp_path / "model"
     assert main(["hybrid", *names, "--case", "paper_sphere", "--out", str(out), *TRAIN]) == 0
     assert json.loads((out / "model.json").read_text())["certificate"]["stable"]
+    hyb = tmp_path / "hyb.nc"
+    assert main(["simulate", "--case", "paper_sphere", *SEA, "--seed", "3", "--network",
+                 str(out), "--out", str(hyb)]) == 0
+    # runs (its accuracy at this size is not the claim: on OC3, 2 x 1800 s, a new sea, the
+    # stripped histories give surge/heave/pitch within 2.0/0.2/1.5 % RMS; docs/CLI.md)
+    run = read_netcdf(hyb)
+    assert run.sizes["time"] == full.sizes["time"] and np.all(np.isfinite(run["z"].values))
+
+
+def test_a_history_with_unramped_eta_gets_its_recorded_ramp(sphere):
+    """A history written before η was stored ramped (η without a ``ramp`` attribute, the ramp
+    in ``attrs["inputs"]``): the ramp is applied to the excitation of its η."""
+    from hybridwsi.casemodel import CaseModel
+    from hybridwsi.surrogate.certified import prepare_histories
+    from hybridwsi.waves import wave_from_dict
+
+    full = read_netcdf(sphere / "s1.nc")
+    t = full["time"].values
+    wave = wave_from_dict(json.loads(full.attrs["inputs"])["wave"])
+    old = full[["z", "zdot", "zddot", "eta", "mass"]].assign(
+        eta=(("time", "probe"), wave.elevation(t)[:, None], {"units": "m"}))
+    old.attrs = dict(full.attrs)
+    model = CaseModel.build("paper_sphere", dofs=["Heave"])
+    got = prepare_histories([old], ["old"], model)[0]["F_exc"].values[:, 0]
+    f_ref = full["F_exc"].values[:, 0]
+    head = t < 8.0
+    assert np.sqrt(np.mean((got[head] - f_ref[head]) ** 2)) < 0.01 * np.sqrt(np.mean(f_ref ** 2))
 
 
 @pytest.mark.slow
 def test_done_means_oc3_user_case(tmp_path):
     """Issue 28 "done means": a user's copy of the OC3 case, two seas, auto partition, a third
-    sea: surge and pitch within 3 % RMS of the reference run (measured 0.85 %, 0.53 %)."""
+    sea: surge and pitch within 3 % RMS of the reference run (measured 0.51 %, 0.41 %); the
+    same with the training histories stripped to time, motions and η without file attributes
+    (measured 2.0 %, 1.5 %)."""
     from importlib.resources import files
 
     src = files("hybridwsi.cases")
@@ -224,8 +267,15 @@ def test_done_means_oc3_user_case(tmp_path):
                  "--partition", "auto", "--out", str(tmp_path / "model"), "--quiet"]) == 0
     assert main(["simulate", "--case", case, "--jonswap", "5", "11", "--seed", "3", *run,
                  "--network", str(tmp_path / "model"), "--out", str(tmp_path / "hyb.nc")]) == 0
-    hyb, ref = xr.open_dataset(tmp_path / "hyb.nc"), xr.open_dataset(tmp_path / "ref.nc")
-    z, z_ref = hyb["z"].values, ref["z"].values
-    err = np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.sqrt(np.mean(z_ref ** 2, 0))
-    dofs = [str(d) for d in hyb["dof"].values]
-    assert err[dofs.index("Surge")] < 0.03 and err[dofs.index("Pitch")] < 0.03
+    stripped = [_stripped(tmp_path / f"{k}.nc", tmp_path / f"{k}_stripped.nc") for k in "ab"]
+    assert main(["hybrid", *stripped, "--case", case, "--partition", "auto",
+                 "--out", str(tmp_path / "model_s"), "--quiet"]) == 0
+    assert main(["simulate", "--case", case, "--jonswap", "5", "11", "--seed", "3", *run,
+                 "--network", str(tmp_path / "model_s"), "--out", str(tmp_path / "hyb_s.nc")]) == 0
+    ref = xr.open_dataset(tmp_path / "ref.nc")
+    z_ref = ref["z"].values
+    dofs = [str(d) for d in ref["dof"].values]
+    for name in ("hyb.nc", "hyb_s.nc"):
+        z = xr.open_dataset(tmp_path / name)["z"].values
+        err = np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.sqrt(np.mean(z_ref ** 2, 0))
+        assert err[dofs.index("Surge")] < 0.03 and err[dofs.index("Pitch")] < 0.03, (name, err)

@@ -59,6 +59,7 @@ import xarray as xr
 from hybridwsi import cummins
 from hybridwsi.bodies import FloatingSphere, body_from_dict
 from hybridwsi.cases import Case, load_case, mooring_model, with_values
+from hybridwsi.cummins.forcing import elevation_attrs
 from hybridwsi.dofs import check_dofs, index
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import (
@@ -83,7 +84,7 @@ from hybridwsi.hydro.irf import radiation_irf
 from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 from hybridwsi.hydro.strip import case_elements, with_slender_members
 from hybridwsi.importers import read_elevation
-from hybridwsi.waves import ElevationRecord, Wave
+from hybridwsi.waves import ElevationRecord, Wave, ramp_factor
 
 #: component name -> TimeHistory variable of its force
 COMPONENT_VARIABLES = {"mooring": "F_mooring", "morison": "F_morison", "rotor": "F_rotor",
@@ -719,8 +720,10 @@ class CaseModel:
             nonlinear_hydrostatics=nonlinear, body=self.body if nonlinear else None, ramp=ramp,
             radiation_ss=ss, progress=progress)
         if wave is not None and excite is None:  # the elevation without its excitation
-            hist = hist.assign(eta=(("time", "probe"), wave.elevation(hist["time"].values)[:, None],
-                                    {"units": "m", "long_name": "incident wave elevation"}))
+            t = hist["time"].values  # ramped as the drag's wave velocity is
+            hist = hist.assign(eta=(("time", "probe"),
+                                    (wave.elevation(t) * ramp_factor(t, ramp))[:, None],
+                                    elevation_attrs(ramp)))
             hist = hist.assign_coords(probe=["origin"])
         hist = record_components(hist, comps)
         hist.attrs["mean_offset"] = json.dumps(dict(zip(self.dofs, offset.tolist())))

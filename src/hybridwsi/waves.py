@@ -966,7 +966,10 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
     -------
     ndarray, shape (nt,) for one ``dof`` (str) or (nt, n_dof) for a list.
         With ``with_elevation=True`` a pair ``(force, eta)``: the incident elevation η(t) [m]
-        (no ramp) comes from the same harmonic sum, at no extra cost.
+        from the same harmonic sum, at no extra cost, ramped like the force: the sea the body
+        was given, so that a history holding η alone is self-consistent (the excitation of
+        its η through the transfer function is the force applied, within the impulse
+        response's spread over the ramp; tests/test_hybrid_model.py measures it).
     """
     dofs = [dof] if isinstance(dof, str) else list(dof)
     comp = wave.components()
@@ -989,6 +992,8 @@ def excitation_force(wave: Wave, coeffs: xr.Dataset, t: np.ndarray,
     c = amplitude[:, None]
     both = harmonic_sum(t, np.concatenate([c * tf, c], axis=1), w)
     force, eta = both[:, :-1], both[:, -1]
-    force *= ramp_factor(t, ramp)[:, None]
+    r = ramp_factor(t, ramp)
+    force *= r[:, None]
+    eta *= r
     force = force[:, 0] if isinstance(dof, str) else force
     return (force, eta) if with_elevation else force

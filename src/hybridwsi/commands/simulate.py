@@ -271,7 +271,7 @@ def _run_network(args: argparse.Namespace) -> xr.Dataset:
     net.check_run(case.sha256, case.label, dofs, args.dt if args.dt is not None
                   else float(net.doc["dt"]))  # before the coefficients are computed
     model = CaseModel.build(case, dofs=dofs, coeffs=args.coeffs, quick=args.quick,
-                            progress=not args.quiet)
+                            progress=not args.quiet, dt=float(net.doc["dt"]))
     defaults = _case_defaults(case)
     wave = _wave(args, model.coeffs, defaults)
     duration, dt, ramp = _timing(args, wave, {**defaults, "dt": float(net.doc["dt"])})

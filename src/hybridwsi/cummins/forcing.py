@@ -9,6 +9,8 @@ stepping solver (:mod:`hybridwsi.cummins.solvers`).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
+
 import numpy as np
 import xarray as xr
 
@@ -41,10 +43,20 @@ def as_wave(wave: Wave | Mapping | None) -> Wave | None:
 
 def excitation(wave: Wave | None, coeffs: xr.Dataset, t: np.ndarray, dofs: list[str],
                ramp: float) -> tuple[np.ndarray, np.ndarray | None]:
-    """F_exc (nt, n) [N, N m] and the incident elevation η (nt,) [m] (None without waves)."""
+    """F_exc (nt, n) [N, N m] and the incident elevation η (nt,) [m] (None without waves),
+    both ramped over ``ramp`` [s]."""
     if wave is None:
         return np.zeros((t.size, len(dofs))), None
     return excitation_force(wave, coeffs, t, list(dofs), ramp=ramp, with_elevation=True)
+
+
+def elevation_attrs(ramp: float) -> dict[str, Any]:
+    """Attributes of a history's ``eta``: the elevation as applied, ramped like the excitation
+    over ``ramp`` [s] (:func:`excitation`). ``ramp`` is recorded on the variable so that a
+    reader knows not to ramp the excitation of this η again; an η without it (a measured
+    record, or a history written before η was ramped) carries no ramp."""
+    return {"units": "m", "long_name": "incident wave elevation, as applied (ramped like the "
+                                       "excitation force)", "ramp": float(ramp)}
 
 
 def split_components(forces: Sequence[KnownComponent] | None

@@ -25,6 +25,7 @@ import xarray as xr
 from hybridwsi._meta import version as _version
 from hybridwsi.cummins.forcing import (
     as_wave,
+    elevation_attrs,
     excitation,
     split_components,
     time_forcing,
@@ -264,8 +265,7 @@ def _history(sys, t, z, v, f_hs, mem, f_exc, f_ext, eta, inputs, extra_mass=None
     del extra["mass"]  # make_history writes it (and the dof_j coordinate); units below
     coords = None
     if eta is not None:  # built with the Dataset: a later assignment costs an xarray merge
-        extra["eta"] = (("time", "probe"), eta[:, None],
-                        {"units": "m", "long_name": "incident wave elevation"})
+        extra["eta"] = (("time", "probe"), eta[:, None], elevation_attrs(inputs["ramp"]))
         coords = {"probe": ["origin"]}
     hist = make_history(t, z, v, acc, forces={k: f[k] for k in FORCES}, dof=sys.dofs,
                         mass=sys.mass, source="cummins", inputs=inputs, check=False,
@@ -365,7 +365,7 @@ def simulate_batch(
     data.update({k: (dims, forces[k], {"role": "force"}) for k in FORCES})
     data.update(_matrix_vars(sys))
     if any(d["wave"] is not None for d in described):
-        data["eta"] = (("case", "time"), eta, {"units": "m"})
+        data["eta"] = (("case", "time"), eta, elevation_attrs(ramp))
     out = xr.Dataset(
         data,
         coords={"case": np.arange(len(cases)), "time": ("time", t, {"units": "s"}),

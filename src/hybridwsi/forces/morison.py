@@ -258,13 +258,15 @@ class MorisonDrag(KnownComponent):
     @classmethod
     def from_case(cls, case: Mapping[str, Any], dofs: Sequence[str] | str | None = None, *,
                   wave: Wave | None = None, ramp: float = 0.0) -> MorisonDrag:
-        """The drag of a case (``load_case("oc3_hywind")``): ``[body.hull]`` profile,
+        """The drag of a case (``load_case("oc3_hywind")``): the ``[body]`` profile (an
+        axisymmetric body, or the ``[body.hull]`` of a rigid assembly),
         ``[hydrodynamics] drag_cd``, ``[environment]`` ρ, g, depth, ``[drag]`` strip settings
         (``strip_length`` [m] or ``n_strips``); ``dofs`` default the case's ``default_dofs``.
         """
         try:
             env, body = case["environment"], case["body"]
-            profile, cd = body["hull"]["profile"], case["hydrodynamics"]["drag_cd"]
+            hull = body["hull"] if "hull" in body else body
+            profile, cd = hull["profile"], case["hydrodynamics"]["drag_cd"]
             rho, g, depth = env["rho"], env["g"], env["water_depth"]
         except KeyError as exc:
             raise InputError(f"case has no Morison drag entry {exc}") from None

@@ -19,7 +19,8 @@ The folder holds
 Training data (:func:`prepare_histories`): histories of the case (any file the importers read);
 a history without ``F_exc`` but with ``eta`` gets the excitation of its recorded elevation
 through the case's BEM transfer function (:func:`hybridwsi.casemodel.record_wave`, as
-``simulate --wave-elevation``), one without ``F_tot`` gets ``M z̈`` (the total force on a rigid
+``simulate --wave-elevation``; a simulated history's η is the elevation as applied, ramped like
+its force, so nothing beyond time, motions and η is needed), one without ``F_tot`` gets ``M z̈`` (the total force on a rigid
 body: the residual is computed from the motion, never asked for).
 
 Running (:meth:`CertifiedModel.simulate`, ``simulate --case … --network MODEL``): the ODE with
@@ -43,7 +44,7 @@ import xarray as xr
 
 from hybridwsi._meta import version
 from hybridwsi.casemodel import CaseModel, linear_components, radiation_ss, record_wave
-from hybridwsi.cummins.forcing import excitation
+from hybridwsi.cummins.forcing import elevation_attrs, excitation
 from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.partition import build_candidates
 from hybridwsi.diagnostic.regression import regress
@@ -110,7 +111,12 @@ def check_cases(hists: Sequence[xr.Dataset], names: Sequence[str], case_sha: str
 
 
 def _ramp(hist: xr.Dataset) -> float:
-    """The excitation ramp [s] a simulated history records (0 for a measured record)."""
+    """The ramp [s] still to apply to the excitation of a history's η: 0 when η is the
+    elevation as applied (``eta.attrs["ramp"]``, :func:`hybridwsi.cummins.forcing.
+    elevation_attrs`: already ramped) or a measured record (no ``inputs``); the ramp recorded
+    in ``attrs["inputs"]`` of a history written before η was stored ramped."""
+    if "ramp" in hist["eta"].attrs:
+        return 0.0
     try:
         return float(json.loads(hist.attrs.get("inputs", "{}")).get("ramp") or 0.0)
     except (TypeError, ValueError, AttributeError):
@@ -363,7 +369,8 @@ class CertifiedModel:
         zero = np.zeros((t.size, len(dofs)))
         case = make_history(t, zero, zero, zero, forces={"F_exc": f_exc}, dof=dofs,
                             mass=np.asarray(pipe.mass_), check=False,
-                            extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
+                            extra_vars={"eta": (("time", "probe"), eta[:, None],
+                                                elevation_attrs(ramp))})
         case.attrs["radiation_ss"] = json.dumps(_state_space(model, dt).to_dict())
         pipe.known_ = [*build_candidates(case, model.coeffs, pipe.candidates_).values(),
                        *case_linear(model)]
@@ -400,7 +407,7 @@ class CertifiedModel:
                     "model_sha256": self.doc["content_sha256"],
                     "partition": self.doc["partition"]["name"]},
             check=False,
-            extra_vars={"eta": (("time", "probe"), eta[:n], {"units": "m"}),
+            extra_vars={"eta": (("time", "probe"), eta[:n], dict(case["eta"].attrs)),
                         "outside_envelope": ("time", flag.astype(np.int8), {
                             "long_name": "network inputs outside the training envelope",
                             "units": "1"})})
