@@ -6,8 +6,9 @@ Set-up (not timed): a model folder trained with the case's ``[hybrid.network]`` 
 on two short seas and few epochs (the cost of a run does not depend on how well the network was
 trained, only on its architecture and the partition); the case's coefficients, cached.
 
-Timed, in this process, alternating the four runs ``REPEATS`` times, median and min-max spread
-of the wall time (``time.perf_counter``):
+Timed, in this process, with the shared harness (``benchmarks/timing.py``: the four runs
+alternated in ``REPEAT`` rounds, median and min-max spread of the wall time; each run is longer
+than a sample's 0.2 s, so one call per sample):
 
 - linear: ``cummins.simulate`` of the case's coefficients in the JONSWAP sea (Hs 5 m, Tp 11 s,
   seed 3, ramp 60 s): excitation synthesised on the grid, the radiation state space of the
@@ -37,10 +38,8 @@ how much).
 
 from __future__ import annotations
 
-import statistics
 import sys
 import tempfile
-import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -52,11 +51,13 @@ from hybridwsi.casemodel import CaseModel
 from hybridwsi.cli import main
 from hybridwsi.surrogate.certified import CertifiedModel
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import REPEAT, Figure, compare, conditions  # noqa: E402
+
 torch.set_num_threads(1)
 CASE, DOFS = "oc3_hywind", ("Surge", "Heave", "Pitch")
 DURATION, DT, RAMP = 3600.0, 0.1, 60.0
 SEA = waves.JONSWAP(hs=5.0, tp=11.0, seed=3, n_components=200)
-REPEATS = 5
 
 
 def train(folder: Path) -> Path:
@@ -71,16 +72,11 @@ def train(folder: Path) -> Path:
     return folder / "model"
 
 
-def timed(fn: Callable[[], object]) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
-
-
-def summary(name: str, times: list[float], n_steps: int) -> float:
-    med = statistics.median(times)
-    print(f"{name:24s} median {med:7.3f} s  [{min(times):.3f}, {max(times):.3f}]  "
-          f"{1e6 * med / n_steps:7.2f} us/step  {DURATION / med:8.0f}x real time")
+def summary(name: str, timing, n_steps: int) -> float:
+    """Print one run's line; returns its median wall time [s]."""
+    med = timing.median
+    print(f"{name:24s} {timing.time_text()}  {1e6 * med / n_steps:7.2f} us/step  "
+          f"{DURATION / med:8.0f}x real time")
     return med
 
 
@@ -105,16 +101,13 @@ def main_() -> int:
         runs = {"linear Cummins": linear, "hybrid": hybrid,
                 "linear, from the case": from_case(linear),
                 "hybrid, from the case": from_case(hybrid)}
-        for fn in runs.values():  # warm-up: Numba dispatch, caches
-            fn()
-        times: dict[str, list[float]] = {name: [] for name in runs}
-        for _ in range(REPEATS):  # alternate, so that a load change hits every run alike
-            for name, fn in runs.items():
-                times[name].append(timed(fn))
+        first, *rest = runs  # warm-up inside compare: Numba dispatch, caches
+        timings = compare(Figure(runs[first]), {k: Figure(runs[k]) for k in rest},
+                          baseline_label=first)
     n = int(round(DURATION / DT))
-    print(f"OC3-Hywind {', '.join(DOFS)}, {DURATION:.0f} s at dt {DT} s ({n} steps), "
-          f"{REPEATS} alternating repeats, wall time")
-    med = {name: summary(name, t, n) for name, t in times.items()}
+    print(f"OC3-Hywind {', '.join(DOFS)}, {DURATION:.0f} s at dt {DT} s ({n} steps)")
+    print(conditions(repeat=REPEAT))
+    med = {name: summary(name, t, n) for name, t in timings.items()}
     for lin, hyb in (("linear Cummins", "hybrid"),
                      ("linear, from the case", "hybrid, from the case")):
         print(f"{hyb}: {med[hyb] / med[lin]:.2f} x the {lin} run (target <= 3), "
