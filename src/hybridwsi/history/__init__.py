@@ -16,7 +16,7 @@ force components, optional ``mass``; units per DOF). The package is split along 
 - :mod:`~hybridwsi.history.signal`: derivative estimation, resampling and the crossing
   analysis (:func:`estimate_derivatives`, :func:`resample`, :func:`finalize_import`,
   :func:`crossing_periods`) and the error measures of records against a reference
-  (:func:`rms_heave_error`, :func:`nrms_percent`).
+  (:func:`rms_heave_error`, :func:`nrms_per_dof`, :func:`nrms_percent`).
 
 Reading any supported file format (the dispatcher ``read_history``) lives one layer up, in
 :mod:`hybridwsi.importers`, which builds on this package; this package never imports it.
@@ -59,6 +59,7 @@ from hybridwsi.history.signal import (
     finalize_import,
     fit_damped_oscillator,
     mean_crossing_period,
+    nrms_per_dof,
     nrms_percent,
     resample,
     rms_heave_error,
@@ -109,6 +110,7 @@ __all__ = [
     "mass_matrix",
     "select_dofs",
     "mean_crossing_period",
+    "nrms_per_dof",
     "nrms_percent",
     "normalise_unit",
     "quantity_of",

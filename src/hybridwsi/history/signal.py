@@ -437,13 +437,19 @@ def crossing_period(t: np.ndarray, z: np.ndarray, window: tuple[float, float]) -
     return mean_crossing_period(t, z, window, z_eq=0.0, skip=1)
 
 
-def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
-    """RMS of (hybrid − reference) z per DOF over the hybrid's times, in % of the reference's
-    RMS z on those times (inf when the hybrid is not finite)."""
-    t = hist["time"].values
-    z_ref = ref["z"].sel(time=t, method="nearest").values
-    z = hist["z"].values
+def nrms_per_dof(hist: xr.Dataset, ref: xr.Dataset, start: float | None = None) -> np.ndarray:
+    """RMS(z − z_ref) / RMS(z_ref) per DOF over the hybrid's times (from ``start`` [s]), inf
+    when the hybrid is not finite."""
+    t = np.asarray(hist["time"].values, float)
+    keep = t >= (start if start is not None else -np.inf)
+    z = np.asarray(hist["z"].values, float)[keep]
+    z_ref = np.asarray(ref["z"].sel(time=t[keep], method="nearest").values, float)
     if not np.all(np.isfinite(z)):
-        return [float("inf")] * z.shape[1]
-    err = np.sqrt(np.mean((z - z_ref) ** 2, axis=0))
-    return (100.0 * err / np.sqrt(np.mean(z_ref ** 2, axis=0))).tolist()
+        return np.full(z.shape[1], np.inf)
+    return np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.maximum(
+        np.sqrt(np.mean(z_ref ** 2, 0)), 1e-300)
+
+
+def nrms_percent(hist: xr.Dataset, ref: xr.Dataset) -> list[float]:
+    """:func:`nrms_per_dof` over all the hybrid's times, in % (inf when not finite)."""
+    return (100.0 * nrms_per_dof(hist, ref)).tolist()

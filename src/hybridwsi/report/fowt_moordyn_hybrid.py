@@ -8,7 +8,7 @@ shipped files.
 Metrics (per held-out sea, after the ramp; ``ref`` = the MoorDyn-coupled run):
 
 - ``nrms``: RMS(x − x_ref) / RMS(x_ref) — the pipeline's convention
-  (:func:`hybridwsi.surrogate.pipeline.nrms_per_dof`), the mean offset included;
+  (:func:`hybridwsi.history.nrms_per_dof`), the mean offset included;
 - ``nrms_dynamic``: RMS(x − x_ref) / std(x_ref) — the same error over the fluctuation alone
   (the stricter number: the 13 m surge offset under the thrust does not dilute it);
 - ``low_energy``: the energy of the surge spectrum below 0.1 rad/s (the slow drift, the

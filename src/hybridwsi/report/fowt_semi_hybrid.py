@@ -36,10 +36,11 @@ import xarray as xr
 
 from hybridwsi.casemodel import CaseModel
 from hybridwsi.dofs import RIGID_DOFS, motion_unit
+from hybridwsi.history import nrms_per_dof
 from hybridwsi.surrogate.certified import CertifiedModel, case_linear, prepare_histories, \
     train_model
 from hybridwsi.surrogate.network import target_force
-from hybridwsi.surrogate.pipeline import HybridPipeline, nrms_per_dof
+from hybridwsi.surrogate.pipeline import HybridPipeline
 from hybridwsi.waves import JONSWAP
 
 #: known candidates of the diagnostic's recommended partition (the case's linearised mooring

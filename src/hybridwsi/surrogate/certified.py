@@ -56,13 +56,14 @@ from hybridwsi.history import (
     KINEMATICS,
     make_history,
     mass_matrix,
+    nrms_per_dof,
     set_mass,
     time_step,
     units_attrs,
 )
 from hybridwsi.surrogate.features import FeatureSpec, channel_array
 from hybridwsi.surrogate.network import ForceNetwork
-from hybridwsi.surrogate.pipeline import HybridPipeline, nrms_per_dof
+from hybridwsi.surrogate.pipeline import HybridPipeline
 
 FORMAT = "hybridwsi.HybridModel/1"
 MODEL_JSON, WEIGHTS, NETWORK_JSON = "model.json", "network.pt", "network.json"

@@ -46,7 +46,7 @@ from hybridwsi.diagnostic.partition import CANDIDATES, build_candidates, select_
 from hybridwsi.errors import InputError
 from hybridwsi.forces import KnownComponent, as_matrix
 from hybridwsi.forces.linear import mass_from
-from hybridwsi.history import KINEMATICS, check_compatible, time_step
+from hybridwsi.history import KINEMATICS, check_compatible, nrms_per_dof, time_step
 from hybridwsi.surrogate.coupled import MODES, corrections_for
 from hybridwsi.surrogate.network import ForceNetwork
 from hybridwsi.surrogate.rollout import RolloutResult, UnstablePartitionError, check_stability
@@ -310,16 +310,3 @@ class HybridPipeline:
         """Held-out R² of the network's force on each history."""
         return [self.network_.score(h, "F_bb", known=self.known_, force=self.force)
                 for h in histories]
-
-
-def nrms_per_dof(hist: xr.Dataset, ref: xr.Dataset, start: float | None = None) -> np.ndarray:
-    """RMS(z − z_ref) / RMS(z_ref) per DOF over the hybrid's times (from ``start`` [s]), inf
-    when the hybrid is not finite."""
-    t = np.asarray(hist["time"].values, float)
-    keep = t >= (start if start is not None else -np.inf)
-    z = np.asarray(hist["z"].values, float)[keep]
-    z_ref = np.asarray(ref["z"].sel(time=t[keep], method="nearest").values, float)
-    if not np.all(np.isfinite(z)):
-        return np.full(z.shape[1], np.inf)
-    return np.sqrt(np.mean((z - z_ref) ** 2, 0)) / np.maximum(
-        np.sqrt(np.mean(z_ref ** 2, 0)), 1e-300)
