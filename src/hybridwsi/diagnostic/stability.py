@@ -586,6 +586,6 @@ def _loosely_coupled(step: CoupledStep, ratio: float) -> SettingVerdict:
 
 def surrogate_stability(*matrices: float | np.ndarray) -> SettingVerdict:
     """Setting (b) of ``CoupledStep(*matrices)`` — the positional form ``(m, A_k, B_k, C_k, α,
-    β, γ)`` kept for callers not yet moved to :func:`assess` (``report/kramer_hybrid.py``);
-    new code: ``assess(CoupledStep(...)).continuous``."""
+    β, γ)``, a public shorthand (no caller inside the package since the Kramer study moved to
+    :func:`assess`); new code: ``assess(CoupledStep(...)).continuous``."""
     return _continuous(CoupledStep(*matrices))
