@@ -135,3 +135,118 @@ def test_batch_kernel_divergence_watch_as_per_case(monkeypatch, ref_amp, all_blo
     first_nan = np.argmax(np.isnan(zb[0, :, 0]))
     crossing = np.argmax(np.abs(zb[0, :, 0]) > 20.0 * ref_amp[0])
     assert 0 < crossing < first_nan <= crossing + 51
+
+
+# ------------------------------------------- nonlinear known components with Numba kernels
+#: OC3-Hywind in surge, heave and pitch: the known part of the MoorDyn hybrid's partition (a)
+OC3_DOFS = ("Surge", "Heave", "Pitch")
+
+
+@pytest.fixture(scope="module")
+def oc3_known():
+    """Hydrostatics, A∞, the additional damping, a small quadratic damping, the tabulated
+    quasi-static mooring and the operating NREL 5-MW rotor in turbulent wind (8 m/s, TI 0.1:
+    the force depends on t), and three 30 s cases (JONSWAP excitation and η, each from a
+    different small start) at Δt 0.1 s; the mass."""
+    from hybridwsi.cases import load_case
+    from hybridwsi.cummins.forcing import excitation
+    from hybridwsi.forces import AddedMass, Hydrostatic, MooringForce, QuadraticDamping
+    from hybridwsi.forces.linear import mass_from
+    from hybridwsi.forces.morison import additional_damping
+    from hybridwsi.forces.rotor import rotor_from_case
+    from hybridwsi.history import make_history
+    from hybridwsi.hydro import coefficients as cf
+    from hybridwsi.report.fowt import oc3_coefficients
+    from hybridwsi.waves import JONSWAP
+
+    case = load_case("oc3_hywind")
+    co, dofs = oc3_coefficients(case), list(OC3_DOFS)
+    rotor = rotor_from_case({**case, "rotor": {**case["rotor"], "state": "operating",
+                                               "wind_speed": 8.0, "wind_seed": 1,
+                                               "turbulence_intensity": 0.1}}, dofs)
+    known = [Hydrostatic(cf.matrix(co, "hydrostatic_stiffness", dofs)),
+             AddedMass(cf.matrix(co, "added_mass_inf", dofs)), additional_damping(case, dofs),
+             QuadraticDamping(np.array([2e5, 1e5, 1e9])), MooringForce.from_case(case, dofs),
+             rotor]
+    t = np.arange(301) * 0.1
+    hs = []
+    for seed in (1, 2, 3):
+        f_exc, eta = excitation(JONSWAP(hs=4.0, tp=10.0, seed=seed), co, t, dofs, 5.0)
+        z = 0.1 * seed * np.array([1.0, 0.05, 0.002]) * np.sin(0.3 * t)[:, None]
+        hs.append(make_history(t, z, np.gradient(z, t, axis=0), np.zeros_like(z),
+                               forces={"F_exc": f_exc}, dof=dofs, check=False,
+                               extra_vars={"eta": (("time", "probe"), eta[:, None])}))
+    return known, hs, mass_from(None, co, dofs)
+
+
+@pytest.fixture(scope="module")
+def oc3_net(oc3_known):
+    from hybridwsi.surrogate.network import ForceNetwork
+
+    _, hs, _ = oc3_known
+    return ForceNetwork(inputs=("z", "zdot", "eta"), hidden=(8,), window=3, stride=2, lead=2,
+                        max_epochs=2, seed=0).fit(hs[:1], lambda h: 0.05 * h["F_exc"].values)
+
+
+@pytest.mark.parametrize("mode, corrections", [("lagged", 1), ("corrected", 2)])
+def test_mooring_table_and_operating_rotor_run_compiled_as_the_stepper(
+        monkeypatch, oc3_known, oc3_net, mode, corrections):
+    """The tabulated mooring and the operating rotor known (partition (a) of the OC3 MoorDyn
+    hybrid): the compiled loop, per case and batched, runs them through their Numba kernels
+    and gives the NumPy stepper's trajectories and forces (their ``ode_force``) to rounding."""
+    from hybridwsi.surrogate.physics import BatchedPhysics
+    from hybridwsi.surrogate.rollout import rollout
+
+    known, hs, mass = oc3_known
+    phys = BatchedPhysics(mass, known, 3)
+    assert [type(c).__name__ for _, c in phys.other] == ["MooringForce", "OperatingRotor"]
+    assert fast.supported("tanh", phys.compiled_forces, mode, "newmark")
+    kw = {"mass": mass, "known": known, "mode": mode, "corrections": corrections,
+          "check": False, "prescribed": "F_exc", "amplitude": 30.0}
+    compiled, run = [], fast.run_explicit
+    monkeypatch.setattr(fast, "run_explicit", lambda *a: compiled.append(1) or run(*a))
+    per_case, batch = _both_kernels(monkeypatch, lambda: rollout(oc3_net, hs, **kw))
+    assert compiled == [1, 1]  # the default (compiled=None) took the compiled loop
+    stepper = rollout(oc3_net, hs, compiled=False, **kw)
+    assert compiled == [1, 1]
+    for hb, hp, hn in zip(batch.histories, per_case.histories, stepper.histories):
+        assert np.ptp(hn["z"].sel(dof="Surge").values) > 5.0  # the rotor pushes it
+        for var in ("z", "zdot", "zddot", "F_net", "F_known"):
+            ref = hn[var].values
+            scale = np.max(np.abs(ref), axis=0)  # per DOF
+            for got in (hp, hb):
+                err = np.max(np.abs(got[var].values - ref), axis=0) / scale
+                assert np.all(err < 1e-10), (var, err)
+
+
+def test_known_component_without_kernel_keeps_the_stepper(monkeypatch, oc3_known, oc3_net):
+    """A nonlinear known component without a Numba kernel (its own ``ode_force``, no
+    ``compiled_force``): the rollout takes the NumPy stepper; forcing the compiled loop is
+    refused (it would leave the component out)."""
+    from hybridwsi.errors import InputError
+    from hybridwsi.forces import KnownComponent
+    from hybridwsi.surrogate.physics import BatchedPhysics
+    from hybridwsi.surrogate.rollout import rollout
+
+    class Cubic(KnownComponent):
+        name = "cubic_spring"
+
+        def ode_force(self, t, z, zdot, x):
+            return -1e3 * np.asarray(z) ** 3
+
+        def force(self, hist):
+            return -1e3 * hist["z"].values ** 3
+
+        def linear_coefficients(self, n):
+            return np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+
+    known, hs, mass = oc3_known
+    known = [*known, Cubic()]
+    assert BatchedPhysics(mass, known, 3).compiled_forces is None
+    assert not fast.supported("tanh", None, "lagged", "newmark")
+    monkeypatch.setattr(fast, "run_explicit", lambda *a: pytest.fail("compiled loop ran"))
+    kw = {"mass": mass, "known": known, "check": False, "prescribed": "F_exc",
+          "amplitude": 30.0, "n_steps": 20}
+    assert not rollout(oc3_net, hs[:1], **kw).solution.failed.any()
+    with pytest.raises(InputError, match="Numba kernel of every nonlinear known component"):
+        rollout(oc3_net, hs[:1], compiled=True, **kw)

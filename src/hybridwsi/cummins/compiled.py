@@ -17,28 +17,34 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from hybridwsi.forces._compiled import HAVE_NUMBA, CompiledForce, _kernel, numba, quiet
+from hybridwsi.forces._compiled import (
+    HAVE_NUMBA,
+    MAX_KERNELS,
+    CompiledForce,
+    available,
+    numba,
+    packed,
+    quiet,
+    sum_forces,
+)
+
+__all__ = ["MAX_KERNELS", "available", "run_rk4"]
 
 
 def _rhs(comps, mats, t, y, u, dy, fs, f, tmp):  # pragma: no cover - compiled
     """``dy = ẏ(t, y)`` and ``fs`` the components' force; returns (status, component).
 
-    ``comps = (kernels, n_kernels, fdata, idata)``, ``mats = (M⁻¹, C, A_r, B_r, C_r)``.
+    ``comps``: the packed kernels (:func:`hybridwsi.forces._compiled.packed`),
+    ``mats = (M⁻¹, C, A_r, B_r, C_r)``.
     """
-    kernels, n_kernels, fdata, idata = comps
     minv, stiff, ar, br, cr = mats
     n = minv.shape[0]
     r = ar.shape[0]
     z = y[:n]
     v = y[n:2 * n]
-    for i in range(n):
-        fs[i] = 0.0
-    for m in range(n_kernels):
-        status = kernels[m](t, z, v, tmp, fdata[m], idata[m])
-        if status != 0:
-            return status, m
-        for i in range(n):
-            fs[i] = fs[i] + tmp[i]
+    status, m = sum_forces(comps, t, z, v, fs, tmp)
+    if status != 0:
+        return status, m
     for i in range(n):
         s = 0.0
         for j in range(n):
@@ -111,28 +117,10 @@ def _loop(comps, mats, u_half, dt, y, f_comp):  # pragma: no cover - compiled
     return st, m, last
 
 
-def _nothing(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
-    """The padding kernel: no force."""
-    for i in range(out.size):
-        out[i] = 0.0
-    return 0
-
-
-#: the loop takes exactly this many kernels (padded with a zero force), so it is compiled
-#: once, whatever the number of components (each tuple length would be a new compilation)
-MAX_KERNELS = 8
-
 if HAVE_NUMBA:
     _rhs = numba.njit(cache=True)(_rhs)
     _stage = numba.njit(cache=True)(_stage)
     _loop = numba.njit(cache=True)(_loop)
-    _nothing = _kernel(_nothing)
-
-
-def available(forces: Sequence[CompiledForce | None]) -> bool:
-    """True when Numba is installed, every component has a kernel and there are at most
-    :data:`MAX_KERNELS` of them."""
-    return HAVE_NUMBA and len(forces) <= MAX_KERNELS and all(f is not None for f in forces)
 
 
 def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.ndarray,
@@ -174,11 +162,7 @@ def run_rk4(forces: Sequence[CompiledForce], minv: np.ndarray, stiffness: np.nda
     f_comp = np.empty((nt, n))
     c = np.ascontiguousarray
     with quiet():
-        pad = [CompiledForce(_nothing, np.zeros(0), np.zeros(0, dtype=np.int64))] * (
-            MAX_KERNELS - len(forces))
-        padded = list(forces) + pad
-        comps = (tuple(f.kernel for f in padded), len(forces), tuple(f.fdata for f in padded),
-                 tuple(f.idata for f in padded))
+        comps = packed(forces)
         mats = (c(minv), c(stiffness), c(ss_a), c(ss_b), c(ss_c))
         status, comp, step = _loop(comps, mats, c(u_half), float(dt), y, f_comp)
     if status == 0:

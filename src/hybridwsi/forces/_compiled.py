@@ -130,6 +130,81 @@ if HAVE_NUMBA:
     _rate = numba.njit(cache=True, inline="always", fastmath=True)(_rate)
 
 
+# ------------------------------------------------------------------- sets of components
+def _nothing(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
+    """The padding kernel: no force."""
+    for i in range(out.size):
+        out[i] = 0.0
+    return 0
+
+
+#: a compiled loop takes exactly this many kernels (padded with a zero force), so it is
+#: compiled once, whatever the number of components (each tuple length would be a new
+#: compilation)
+MAX_KERNELS = 8
+
+nothing_kernel = _kernel(_nothing)
+
+
+def available(forces: Any) -> bool:
+    """True when Numba is installed, every component has a kernel (not None) and there are
+    at most :data:`MAX_KERNELS` of them."""
+    return HAVE_NUMBA and len(forces) <= MAX_KERNELS and all(f is not None for f in forces)
+
+
+def packed(forces: Any) -> tuple:
+    """The components' kernels as a compiled loop takes them: ``(kernels, n_kernels, fdata,
+    idata)``, tuples padded to :data:`MAX_KERNELS` with a zero force (call under
+    :func:`quiet`)."""
+    pad = [CompiledForce(nothing_kernel, np.zeros(0), np.zeros(0, dtype=np.int64))] * (
+        MAX_KERNELS - len(forces))
+    padded = list(forces) + pad
+    return (tuple(f.kernel for f in padded), len(forces), tuple(f.fdata for f in padded),
+            tuple(f.idata for f in padded))
+
+
+def _sum_forces(comps, t, z, zdot, fs, tmp):  # pragma: no cover - compiled
+    """``fs`` = the summed force of the packed components (:func:`packed`) at ``(t, z, ż)``,
+    ``tmp`` scratch (n,); returns ``(status, component)``: (0, -1), or the first failing
+    kernel's code and index."""
+    kernels, n_kernels, fdata, idata = comps
+    for i in range(fs.size):
+        fs[i] = 0.0
+    for m in range(n_kernels):
+        status = kernels[m](t, z, zdot, tmp, fdata[m], idata[m])
+        if status != 0:
+            return status, m
+        for i in range(fs.size):
+            fs[i] = fs[i] + tmp[i]
+    return 0, -1
+
+
+def _force_rows(comps, t, z, zdot, out):  # pragma: no cover - compiled
+    """:func:`_sum_forces` on every row of ``t`` (n,), ``z``, ``zdot`` (n, n_dof) into ``out``
+    (n, n_dof). A row whose state is not finite gets NaN (a diverged case); returns
+    ``(status, component, row)`` of the first failing finite row, else (0, -1, -1)."""
+    n = z.shape[1]
+    tmp = np.empty(n)
+    for r in range(z.shape[0]):
+        finite = True
+        for i in range(n):
+            finite = finite and np.isfinite(z[r, i]) and np.isfinite(zdot[r, i])
+        if not finite:
+            out[r, :] = np.nan
+            continue
+        status, m = sum_forces(comps, t[r], z[r], zdot[r], out[r], tmp)
+        if status != 0:
+            return status, m, r
+    return 0, -1, -1
+
+
+if HAVE_NUMBA:
+    sum_forces = numba.njit(cache=True)(_sum_forces)
+    force_rows = numba.njit(cache=True)(_force_rows)
+else:
+    sum_forces = force_rows = None
+
+
 # ------------------------------------------------------------------------------- linear
 def _linear(t, z, zdot, out, fdata, idata):  # pragma: no cover - compiled
     # fdata = [B (n×n, row-major), C (n×n)]: out = −B ż − C z (KnownComponent.ode_force)

@@ -16,8 +16,9 @@ of the network force:
 :func:`solve_coupled` integrates a batch with it under the solver contract of
 :mod:`hybridwsi.cummins.result` (``solve(system, u, z0, v0, dt, *, progress, **options) ->
 SolverResult``; a diverging case is reported in ``failed``, never raised), by the NumPy
-stepper or, for ``lagged``/``corrected`` with the usual known components, by the compiled loop
-of :mod:`hybridwsi.surrogate.fast` (:data:`LOOPS`).
+stepper or, for ``lagged``/``corrected`` when every nonlinear known component has a Numba
+kernel (:meth:`BatchedPhysics.compiled_forces`), by the compiled loop of
+:mod:`hybridwsi.surrogate.fast`.
 """
 
 from __future__ import annotations
@@ -300,9 +301,10 @@ def solve_coupled(stepper: CoupledStepper, u: np.ndarray, z0: np.ndarray, v0: np
     if layers is None:
         run = _numpy_loop(stepper, s, t, u, eta, start, lead, n_steps, ref_amp, progress)
     else:
-        run = _compiled_loop(stepper, layers, s, u, eta, start, lead, n_steps, ref_amp)
+        run = _compiled_loop(stepper, layers, s, t, u, eta, start, lead, n_steps, ref_amp)
     zs, vs, as_, xs, blew, n_done, iterations, n_net, f_rec = run
-    f_known, f_net = _trajectory_forces(stepper.phys, t, start, u, (zs, vs, as_, xs), f_rec)
+    f_known, f_net = _trajectory_forces(stepper.phys, t, start, u, (zs, vs, as_, xs), f_rec,
+                                        compiled=layers is not None)
     n_bad = int(blew.sum())
     message = (f"{n_bad} of {len(blew)} case(s) diverged (|z| above {BLOWUP_FACTOR:g} x the "
                "reference's largest, or not finite)" if n_bad else
@@ -345,31 +347,36 @@ def _numpy_loop(stepper: CoupledStepper, s: State, t, pre, eta, k0: int, lead: i
             f_rec)
 
 
-def _compiled_loop(stepper: CoupledStepper, layers: fast.FoldedLayers, s: State, pre, eta,
+def _compiled_loop(stepper: CoupledStepper, layers: fast.FoldedLayers, s: State, t, pre, eta,
                    k0: int, lead: int, n_steps: int, ref_amp: np.ndarray) -> Loop:
     """The same step map in one compiled loop (:func:`.fast.run_explicit`)."""
     zs, vs, as_, xs, blew, n_done = fast.run_explicit(
         explicit_problem(stepper), layers, s.z, s.v, s.a, s.x, s.buf, pre, eta, k0, lead,
-        n_steps, ref_amp, BLOWUP_FACTOR)
+        n_steps, ref_amp, BLOWUP_FACTOR, t)
     passes = 1 + stepper.corrections
     return zs, vs, as_, xs, blew, n_done, np.full(n_done, passes), passes * n_done, None
 
 
 def _trajectory_forces(phys: BatchedPhysics, t: np.ndarray, k0: int, pre: np.ndarray,
-                       traj: tuple[np.ndarray, ...], f_rec: np.ndarray | None
-                       ) -> tuple[np.ndarray, np.ndarray]:
+                       traj: tuple[np.ndarray, ...], f_rec: np.ndarray | None,
+                       compiled: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """``F_known`` and ``F_net`` [N, N m] on the trajectory (the start sample included):
     the known force (its acceleration part from z̈) and the network force actually applied
-    (lagged: the one evaluated on the step before), from the equation of motion."""
+    (lagged: the one evaluated on the step before), from the equation of motion. ``compiled``:
+    the :attr:`~BatchedPhysics.other` components by their kernels (as the compiled loop)."""
     zs, vs, as_, xs = traj
     nc, n1, nd = zs.shape
     a_k = phys.m_eff - phys.mass
     fknown, fnet = np.empty((nc, n1, nd)), np.empty((nc, n1, nd))
-    if not phys.other:  # no explicit t dependence: all cases and steps in one evaluation
+    if not phys.other or compiled:  # all cases and steps in one evaluation
         rows, shape = nc * n1, (nc, n1, nd)
         acc = as_.reshape(rows, nd)  # views: the trajectories are contiguous
-        f_phys = phys.force(t[k0], zs.reshape(rows, nd), vs.reshape(rows, nd),
-                            xs.reshape(rows, phys.n_states)).reshape(shape)
+        z_r, v_r = zs.reshape(rows, nd), vs.reshape(rows, nd)
+        f_phys = phys.force(t[k0], z_r, v_r, xs.reshape(rows, phys.n_states), other=False)
+        if phys.other:  # explicit t dependence: each row at its own time
+            f_phys += fast.known_forces(phys.compiled_forces, np.tile(t[k0:k0 + n1], nc),
+                                        z_r, v_r)
+        f_phys = f_phys.reshape(shape)
         fknown[:] = f_phys - np.dot(acc, a_k.T).reshape(shape)  # np.dot: see force()
         fnet[:] = np.dot(acc, phys.m_eff.T).reshape(shape) - f_phys - pre[:, k0:k0 + n1]
         return fknown, fnet
@@ -396,6 +403,9 @@ def explicit_problem(stepper: CoupledStepper) -> fast.ExplicitProblem:
             pos[i] = [spec.channels.index((name, k)) for k in range(nd)]
     eta_pos = np.array([spec.channels.index(("eta", k)) for k in range(spec.n_probe)]
                        if stepper._has_eta else [], dtype=np.int64)
+    if phys.compiled_forces is None:
+        raise InputError("the compiled rollout loop needs a Numba kernel of every nonlinear "
+                         "known component: " + ", ".join(c.describe() for _, c in phys.other))
     return fast.ExplicitProblem(
         scheme=0 if stepper.scheme == "newmark" else 1, lhs_inv=integ._lhs_inv,
         damping=np.ascontiguousarray(phys.b_lin), stiffness=np.ascontiguousarray(phys.c_lin),
@@ -403,5 +413,6 @@ def explicit_problem(stepper: CoupledStepper) -> fast.ExplicitProblem:
         coef=np.array([dt] + [getattr(integ, k, 0.0) for k in ("_c_v", "_c_z", "_c_z1", "_c_v1")]),
         quad=np.ascontiguousarray(phys.quad),
         p_ss=p_ss, q_ss=q_ss, c_out=c_out, chan_pos=pos, eta_pos=eta_pos, window=spec.window,
-        stride=spec.stride, corrections=stepper.corrections)
+        stride=spec.stride, corrections=stepper.corrections,
+        forces=tuple(phys.compiled_forces))
 

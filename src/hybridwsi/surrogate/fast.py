@@ -12,6 +12,10 @@ A tiny network evaluated once or twice per time step is dominated by per-call ov
   preallocated scratch vectors, the feature window as a ring buffer, the trapezoidal
   radiation-state update as precomputed transition matrices, no allocation per step.
   It runs the arithmetic of ``coupled.CoupledStepper._lagged`` (tests compare both to 1e-12).
+  Nonlinear known components with a Numba kernel (``KnownComponent.compiled_force``, the
+  kernels of :mod:`hybridwsi.forces._compiled` the compiled Cummins loop calls: the tabulated
+  mooring, the operating rotor, Morison drag...) are evaluated inside the loop, where the
+  stepper evaluates their ``ode_force``.
 
 Without Numba, :data:`HAVE_NUMBA` is False and the rollout uses its NumPy stepper.
 """
@@ -26,6 +30,9 @@ from typing import Any
 import numpy as np
 
 from hybridwsi._numba import HAVE_NUMBA, numba
+from hybridwsi.errors import SolverError
+from hybridwsi.forces._compiled import CompiledForce, available, force_rows, packed, quiet, \
+    sum_forces
 
 #: batches of at least this many cases run the kernel with the cases inner (vectorised over
 #: the batch); smaller ones one case after the other (vectorised over the hidden units)
@@ -109,6 +116,9 @@ class ExplicitProblem:
     damping [N s²/m²], radiation states ``x1 = P x + Q (v + v1)`` with ``P`` (n_s, n_s),
     ``Q`` (n_s, n_dof) and force ``-C_out x`` (``C_out`` (n_dof, n_s)). Channels: positions of
     z, zdot, zddot per dof and of eta per probe in the feature row (-1 = not an input).
+    ``forces``: the kernels of the other known components (their force added to the
+    explicit part at the state and time the stepper evaluates them, at most
+    :data:`hybridwsi.forces._compiled.MAX_KERNELS`).
     """
 
     scheme: int
@@ -125,11 +135,12 @@ class ExplicitProblem:
     window: int
     stride: int
     corrections: int
+    forces: tuple[CompiledForce, ...] = ()
 
 
 def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, buf0,
                  pre: np.ndarray, eta: np.ndarray, k0: int, lead: int, n_steps: int,
-                 ref_amp: np.ndarray, blowup: float):
+                 ref_amp: np.ndarray, blowup: float, t: np.ndarray | None = None):
     """Compiled ``lagged``/``corrected`` rollout of a batch of cases.
 
     Parameters
@@ -147,6 +158,9 @@ def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, bu
     k0, lead, n_steps : int
     ref_amp : ndarray, shape (n_cases,)
         Reference max |z| per case; ``blowup`` the factor beyond which a case diverged.
+    t : ndarray, shape (n_time,), optional
+        The time grid [s] of ``pre`` (the kernels of ``prob.forces`` read it; default
+        ``k dt``).
 
     Returns
     -------
@@ -155,32 +169,66 @@ def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, bu
     blew : ndarray of bool, (n_cases,)
     n_done : int
         Steps integrated (fewer than ``n_steps`` when every case diverged; NaN after).
+
+    Raises
+    ------
+    SolverError
+        A kernel of ``prob.forces`` failed (e.g. a fairlead left the mooring table), as the
+        component's ``ode_force`` raises in the NumPy stepper.
     """
     nc, span, nch = buf0.shape
+    as_c = lambda arr: np.ascontiguousarray(arr, dtype=float)  # noqa: E731
+    times = as_c(np.arange(pre.shape[1]) * prob.coef[0] if t is None else t)
     physics = (prob.scheme, prob.lhs_inv, prob.damping, prob.stiffness, prob.coef, prob.quad,
                prob.p_ss, prob.q_ss, prob.c_out, prob.chan_pos, prob.eta_pos,
                int(prob.window), int(prob.stride), int(prob.corrections))
     kind = ACTIVATION_CODES[layers.activation]
-    tail = (int(k0), int(lead), int(n_steps), np.ascontiguousarray(ref_amp, dtype=float),
-            float(blowup))
-    if nc >= BATCH_MIN:  # cases inner: the batch axis last, contiguous
-        last = lambda arr: np.ascontiguousarray(np.moveaxis(np.asarray(arr, dtype=float), 0, -1))
-        wts = tuple(np.ascontiguousarray(w.T) for w in layers.weights)  # (n_out, n_in)
-        bs = tuple(np.ascontiguousarray(b, dtype=float) for b in layers.biases)
-        return _kernel_batch(*physics, wts, bs, kind, last(z0), last(v0), last(a0), last(x0),
-                             last(buf0[:, ::-1, :]), np.ascontiguousarray(pre, dtype=float),
-                             np.ascontiguousarray(eta, dtype=float), *tail)
-    # ring buffer: row `head` is lag 0, row (head - l) % span is lag l
-    ring = np.ascontiguousarray(buf0[:, ::-1, :])
-    as_c = lambda arr: np.ascontiguousarray(arr, dtype=float)
-    return _kernel(*physics, *padded_layers(layers), kind, as_c(z0), as_c(v0), as_c(a0),
-                   as_c(x0), ring, as_c(pre), as_c(eta), *tail)
+    tail = (int(k0), int(lead), int(n_steps), as_c(ref_amp), float(blowup))
+    with quiet():
+        comps = packed(prob.forces)
+        if nc >= BATCH_MIN:  # cases inner: the batch axis last, contiguous
+            last = lambda arr: as_c(np.moveaxis(np.asarray(arr, dtype=float), 0, -1))  # noqa
+            wts = tuple(np.ascontiguousarray(w.T) for w in layers.weights)  # (n_out, n_in)
+            bs = tuple(as_c(b) for b in layers.biases)
+            out = _kernel_batch(*physics, comps, wts, bs, kind, last(z0), last(v0), last(a0),
+                                last(x0), last(buf0[:, ::-1, :]), as_c(pre), as_c(eta), times,
+                                *tail)
+        else:  # ring buffer: row `head` is lag 0, row (head - l) % span is lag l
+            ring = np.ascontiguousarray(buf0[:, ::-1, :])
+            out = _kernel(*physics, comps, *padded_layers(layers), kind, as_c(z0), as_c(v0),
+                          as_c(a0), as_c(x0), ring, as_c(pre), as_c(eta), times, *tail)
+    _raise_failed(prob.forces, out[-2], out[-1])
+    return out[:-2]
 
 
-def supported(activation: str, other_components: Sequence[Any], mode: str, scheme: str) -> bool:
-    """Whether :func:`run_explicit` can run this rollout."""
-    return (HAVE_NUMBA and activation in ACTIVATION_CODES and not other_components
-            and mode in ("lagged", "corrected") and scheme in ("newmark", "semi_implicit_euler"))
+def _raise_failed(forces: Sequence[CompiledForce], status: int, comp: int) -> None:
+    """:class:`SolverError` with the message of kernel ``comp``'s nonzero ``status``."""
+    if status != 0:
+        raise SolverError(forces[comp].messages.get(
+            status, f"force kernel {comp} failed with status {status}"))
+
+
+def known_forces(forces: Sequence[CompiledForce], t: np.ndarray, z: np.ndarray,
+                 v: np.ndarray) -> np.ndarray:
+    """The summed force [N, N m] of the kernels ``forces`` on the rows of ``t`` (n,) [s],
+    ``z``, ``v`` (n, n_dof) — what their ``ode_force`` gives row by row; NaN on rows whose
+    state is not finite (a diverged case)."""
+    out = np.empty(np.shape(z))
+    with quiet():
+        status, comp, _ = force_rows(packed(forces), np.ascontiguousarray(t, dtype=float),
+                                     np.ascontiguousarray(z, dtype=float),
+                                     np.ascontiguousarray(v, dtype=float), out)
+    _raise_failed(forces, status, comp)
+    return out
+
+
+def supported(activation: str, known: Sequence[CompiledForce] | None, mode: str,
+              scheme: str) -> bool:
+    """Whether :func:`run_explicit` can run this rollout: ``known`` the kernels of the
+    nonlinear known components (``BatchedPhysics.compiled_forces``; None when one has none)."""
+    return (HAVE_NUMBA and activation in ACTIVATION_CODES and known is not None
+            and available(known) and mode in ("lagged", "corrected")
+            and scheme in ("newmark", "semi_implicit_euler"))
 
 
 # ------------------------------------------------------------------------- compiled kernel
@@ -331,6 +379,18 @@ def _remainder(v, x, quad, c_out, f):
 
 
 @_inline
+def _known(comps, t, z, v, f, fs, tmp):
+    """f += the packed kernels' force at (t, z, v) (none: nothing done); returns the first
+    failing kernel's (status, index) or (0, -1)."""
+    if comps[1] == 0:
+        return 0, -1
+    status, m = sum_forces(comps, t, z, v, fs, tmp)
+    for d in range(f.shape[0]):
+        f[d] += fs[d]
+    return status, m
+
+
+@_inline
 def _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
                z1, v1, a1, x1, r):
     """One LaggedIntegrator step with explicit force f, then the radiation states."""
@@ -381,8 +441,8 @@ def _trajectories(nc, n_steps, nd, ns):
 
 @_jit
 def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, chan_pos,
-            eta_pos, window, stride, corrections, w_all, b_all, sizes, kind, z0, v0, a0, x0,
-            ring, pre, eta, k0, lead, n_steps, ref_amp, blowup):
+            eta_pos, window, stride, corrections, comps, w_all, b_all, sizes, kind, z0, v0, a0,
+            x0, ring, pre, eta, t, k0, lead, n_steps, ref_amp, blowup):
     nc, nd = z0.shape
     ns = x0.shape[1]
     span, nch = ring.shape[1], ring.shape[2]
@@ -396,7 +456,7 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
                 wt_all[k, j, i] = w_all[k, i, j]
     row = np.zeros(nch)
     h0, h1 = np.empty(width), np.empty(width)
-    f, r = np.empty(nd), np.empty(nd)
+    f, r, fs, tmp = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
     z, v, a, x = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(ns)
     z1, v1, a1, x1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(ns)
     blew = np.zeros(nc, dtype=np.bool_)
@@ -411,21 +471,21 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
         n_case = n_steps
         for n in range(n_steps):
             k1 = k0 + n + 1
-            # predictor: network on the start-of-step window, remainder on the start state
-            _forward_case(ring, c, head, row, False, window, stride, w_all, wt_all, b_all,
-                          sizes, kind, h0, h1, f)
-            for d in range(nd):
-                f[d] += pre[c, k1, d]
-            _remainder(v, x, quad, c_out, f)
-            _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
-                       z1, v1, a1, x1, r)
-            for _ in range(corrections):  # again on the predicted end-of-step state
-                _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
-                _forward_case(ring, c, head, row, True, window, stride, w_all, wt_all,
-                              b_all, sizes, kind, h0, h1, f)
+            # pass 0 (predictor): network on the start-of-step window, the known explicit
+            # forces on the start state at t[k1] - dt; passes > 0: again on the predicted
+            # end-of-step state at t[k1]
+            for p in range(1 + corrections):
+                if p > 0:
+                    _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
+                _forward_case(ring, c, head, row, p > 0, window, stride, w_all, wt_all, b_all,
+                              sizes, kind, h0, h1, f)
                 for d in range(nd):
                     f[d] += pre[c, k1, d]
-                _remainder(v1, x1, quad, c_out, f)
+                _remainder(v if p == 0 else v1, x if p == 0 else x1, quad, c_out, f)
+                st, m = _known(comps, t[k1] - coef[0] if p == 0 else t[k1], z if p == 0 else z1,
+                               v if p == 0 else v1, f, fs, tmp)
+                if st != 0:  # as ode_force raising in the stepper
+                    return zs, vs, as_, xs, blew, n_done, st, m
                 _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss,
                            x, z1, v1, a1, x1, r)
             _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
@@ -452,7 +512,7 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
                     xs[c, n + 2:] = np.nan
                     break
         n_done = max(n_done, n_case)
-    return zs, vs, as_, xs, blew, n_done
+    return zs, vs, as_, xs, blew, n_done, 0, -1
 
 
 # ------------------------------------------------------------ batch kernel (cases inner)
@@ -518,8 +578,10 @@ def _forward_b(feat, wts, bs, kind):
 
 
 @_inline
-def _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f):
-    """f = network + prescribed ``pre[case, k1]`` - quad |v| v - C_out x, (nd, nc)."""
+def _explicit_force_b(fnet, pre, k1, z, v, x, quad, c_out, comps, t, f, scratch):
+    """f = network + prescribed ``pre[case, k1]`` - quad |v| v - C_out x + the packed
+    kernels' force at (t, z, v), (nd, nc); ``scratch`` four vectors (nd,). Returns the
+    first failing kernel's (status, index) or (0, -1)."""
     nd, nc = f.shape
     ns = x.shape[0]
     for d in range(nd):
@@ -530,6 +592,18 @@ def _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f):
             cds = c_out[d, s]
             for c in range(nc):
                 f[d, c] -= cds * x[s, c]
+    if comps[1] == 0:
+        return 0, -1
+    zc, vc, fs, tmp = scratch
+    for c in range(nc):  # the kernels take one contiguous state
+        for d in range(nd):
+            zc[d], vc[d] = z[d, c], v[d, c]
+        status, m = sum_forces(comps, t, zc, vc, fs, tmp)
+        if status != 0:
+            return status, m
+        for d in range(nd):
+            f[d, c] += fs[d]
+    return 0, -1
 
 
 @_inline
@@ -603,8 +677,8 @@ def _row_b(z, v, a, eta, k, chan_pos, eta_pos, row):
 
 @_jit
 def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out,
-                  chan_pos, eta_pos, window, stride, corrections, wts, bs, kind,
-                  z0, v0, a0, x0, ring, pre, eta, k0, lead, n_steps, ref_amp, blowup):
+                  chan_pos, eta_pos, window, stride, corrections, comps, wts, bs, kind,
+                  z0, v0, a0, x0, ring, pre, eta, t, k0, lead, n_steps, ref_amp, blowup):
     """:func:`_kernel` with the cases inner in the state: ``z0`` (nd, nc), ``x0`` (ns, nc),
     ``ring`` (span, nch, nc); ``pre``, ``eta`` and the outputs as :func:`_kernel`'s, (nc,
     n_time, n) (a step reads/writes one element per case: a few cache lines, reused by the
@@ -618,6 +692,7 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
     feat = np.empty((window * nch, nc))
     row = np.zeros((nch, nc))
     f, r = np.empty((nd, nc)), np.empty((nd, nc))
+    scratch = (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd))
     z, v, a, x = z0.copy(), v0.copy(), a0.copy(), x0.copy()
     z1, v1, a1, x1 = np.empty((nd, nc)), np.empty((nd, nc)), np.empty((nd, nc)), np.empty((ns, nc))
     blew = np.zeros(nc, dtype=np.bool_)
@@ -629,17 +704,19 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
     for n in range(n_steps):
         k1 = k0 + n + 1
         for p in range(1 + corrections):
-            # p = 0: network on the start-of-step window, remainder on the start state;
-            # p > 0: again on the predicted end-of-step state (corrected coupling)
+            # p = 0: network on the start-of-step window, known explicit forces on the start
+            # state at t[k1] - dt; p > 0: again on the predicted end-of-step state at t[k1]
             if p == 0:
                 _gather_b(ring, head, row, False, window, stride, feat)
-                fnet = _forward_b(feat, wts, bs, kind)
-                _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f)
+                st, m = _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, z, v, x,
+                                          quad, c_out, comps, t[k1] - coef[0], f, scratch)
             else:
                 _row_b(z1, v1, a1, eta, k1 + lead, chan_pos, eta_pos, row)
                 _gather_b(ring, head, row, True, window, stride, feat)
-                fnet = _forward_b(feat, wts, bs, kind)
-                _explicit_force_b(fnet, pre, k1, v1, x1, quad, c_out, f)
+                st, m = _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, z1, v1,
+                                          x1, quad, c_out, comps, t[k1], f, scratch)
+            if st != 0:  # as ode_force raising in the stepper
+                return zs, vs, as_, xs, blew, n_done, st, m
             _integrate_b(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
                          z1, v1, a1, x1, r)
         head = head + 1 if head + 1 < span else 0
@@ -676,4 +753,4 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
         if blew[c]:
             zs[c, n_case[c] + 1:], vs[c, n_case[c] + 1:] = np.nan, np.nan
             as_[c, n_case[c] + 1:], xs[c, n_case[c] + 1:] = np.nan, np.nan
-    return zs, vs, as_, xs, blew, n_done
+    return zs, vs, as_, xs, blew, n_done, 0, -1

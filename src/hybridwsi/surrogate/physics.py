@@ -10,6 +10,7 @@ rollout (:func:`hybridwsi.surrogate.rollout.check_stability`) use it.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -100,19 +101,31 @@ class BatchedPhysics:
         memory states, other components)."""
         return bool(self._quad or self.ss or self.other)
 
+    @functools.cached_property
+    def compiled_forces(self) -> list | None:
+        """The Numba kernels (:class:`hybridwsi.forces._compiled.CompiledForce`) of the
+        :attr:`other` components, in their order, for the compiled rollout loop; None when
+        one has none (internal states, ``begin_step``, no kernel, no Numba). Built once."""
+        forces = [None if comp.n_states or comp.stepped else comp.compiled_force(self.n_dof)
+                  for _, comp in self.other]
+        return forces if all(f is not None for f in forces) else None
+
     def _add_remainder(self, f: np.ndarray, t: float, z: np.ndarray, v: np.ndarray,
-                       x: np.ndarray) -> np.ndarray:
-        """``f`` plus the known forces beyond the linear part [N], (n_cases, n_dof)."""
+                       x: np.ndarray, other: bool = True) -> np.ndarray:
+        """``f`` plus the known forces beyond the linear part [N], (n_cases, n_dof) (without
+        the :attr:`other` components when ``other`` is False)."""
         if self._quad:  # an all-zero coefficient adds exactly nothing
             f = f - self.quad * np.abs(v) * v
         for sl, _, _, c in self.ss:
             f -= np.dot(x[:, sl], c.T)
-        for sl, comp in self.other:
+        for sl, comp in self.other if other else ():
             f += np.stack([comp.ode_force(t, z[i], v[i], x[i, sl]) for i in range(len(z))])
         return f
 
-    def force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """Known force without its acceleration part [N], (n_cases, n_dof).
+    def force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray, *,
+              other: bool = True) -> np.ndarray:
+        """Known force without its acceleration part [N], (n_cases, n_dof) (``other`` False:
+        without the :attr:`other` components).
 
         Row-wise: with no ``other`` components (``t`` unused) the rows may stack any batch of
         states, e.g. all time steps of a trajectory at once.
@@ -120,7 +133,7 @@ class BatchedPhysics:
         # np.dot, not @: on tall (rows, n_dof) operands ``@`` runs a non-BLAS loop, ~15x
         # slower for one dof (the whole trajectory goes through here after a rollout)
         return self._add_remainder(-np.dot(v, self.b_lin.T) - np.dot(z, self.c_lin.T), t, z, v,
-                                   x)
+                                   x, other)
 
     def explicit_force(self, t: float, z: np.ndarray, v: np.ndarray, x: np.ndarray) -> np.ndarray:
         """The known force minus its linear ``-B_k v - C_k z`` part [N] (treated explicitly),

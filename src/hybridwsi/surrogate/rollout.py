@@ -26,9 +26,11 @@ Aitken relaxation.
 - ``mode="implicit"``: the network sees the current step, ``F_net^{n+1} = N(x^{n+1})``, and
   is re-evaluated inside the fixed point (it converges only while ``|alpha_s| < m + A_k``).
 
-``lagged`` and ``corrected`` rollouts with the usual known components run in one compiled loop
-(:mod:`hybridwsi.surrogate.fast`, when Numba is installed; ``compiled=False`` forces the NumPy
-stepper, which the stability map always uses).
+``lagged`` and ``corrected`` rollouts run in one compiled loop (:mod:`hybridwsi.surrogate.fast`,
+when Numba is installed) when every nonlinear known component has a Numba kernel (the
+tabulated mooring, the operating rotor, Morison drag...; a component with internal states or
+``begin_step`` keeps the NumPy stepper); ``compiled=False`` forces the NumPy stepper, which the
+stability map always uses.
 
 Before rolling out, :func:`check_stability` linearises the network (autograd) and computes the
 spectral radius of the *same* step map with the network replaced by its Jacobian (all feature
@@ -319,8 +321,8 @@ def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
     stepper = CoupledStepper(phys, spec, dt, mode, network_force(net), scheme, max_iter, tol,
                              corrections)
     start, kin = _start(phys, spec, hs)
-    use_compiled = fast.supported(net.activation, phys.other, mode, scheme) if compiled is None \
-        else bool(compiled)
+    use_compiled = fast.supported(net.activation, phys.compiled_forces, mode, scheme) \
+        if compiled is None else bool(compiled)
     k0 = w - 1
     sol = solve_coupled(
         stepper, pre, start.z, start.v, dt, progress=progress, a0=start.a, x0=start.x,
