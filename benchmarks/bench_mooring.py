@@ -37,8 +37,8 @@ turbulence intensity 0.1, Kaimal), Newman's slow drift — in a JONSWAP sea (Hs 
 
 ``--hybrid``: the two hybrids of ``scripts/oc3_moordyn_hybrid.py`` (the shipped networks
 ``hybridwsi/data/oc3_moordyn_hybrid*_network``; ``hybrid``: the quasi-static mooring and the
-rotor in the ODE, NumPy stepper; ``hybrid_lin``: a linear known part, compiled loop;
-``corrected`` coupling) against their MoorDyn-coupled reference on the same sea and wind (the
+rotor in the ODE, run by their Numba kernels inside the compiled loop; ``hybrid_lin``: a linear
+known part; both in the compiled loop, ``corrected`` coupling) against their MoorDyn-coupled reference on the same sea and wind (the
 first held-out sea: Hs 4.5 m, Tp 10.5 s, 8.5 m/s, TI 0.1; Surge, Heave, Pitch; Δt 0.1 s),
 side by side, alternating ``--repeat`` times (≥ 3). A hybrid's time includes what it needs
 per sea besides the rollout (the excitation and η, the mean offset, the rotor's wind force,
