@@ -250,3 +250,19 @@ def test_known_component_without_kernel_keeps_the_stepper(monkeypatch, oc3_known
     assert not rollout(oc3_net, hs[:1], **kw).solution.failed.any()
     with pytest.raises(InputError, match="Numba kernel of every nonlinear known component"):
         rollout(oc3_net, hs[:1], compiled=True, **kw)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_kernel_failure_raises_as_the_stepper(oc3_known, oc3_net, compiled):
+    """A state leaving a component's table (a 200 MN surge push drives the platform out of the
+    mooring table / the rotor's wind range within seconds) is a SolverError on both paths,
+    as ``ode_force`` raises it in the stepper — never an extrapolated force."""
+    from hybridwsi.errors import SolverError
+    from hybridwsi.surrogate.rollout import rollout
+
+    known, hs, mass = oc3_known
+    push = np.stack([h["F_exc"].values for h in hs[:1]])
+    push[..., 0] += 2e8
+    with pytest.raises(SolverError, match="outside"):
+        rollout(oc3_net, hs[:1], mass=mass, known=known, check=False, prescribed=push,
+                amplitude=1e4, compiled=compiled)

@@ -185,17 +185,20 @@ def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, bu
     kind = ACTIVATION_CODES[layers.activation]
     tail = (int(k0), int(lead), int(n_steps), as_c(ref_amp), float(blowup))
     with quiet():
-        comps = packed(prob.forces)
+        # None without kernels: a call through a function pointer in the loop, even one never
+        # taken, keeps LLVM from optimising the loop (1.8x the cost per step of one case,
+        # measured); the kernels' `comps is not None` branches are pruned for None
+        known = packed(prob.forces) if prob.forces else None
         if nc >= BATCH_MIN:  # cases inner: the batch axis last, contiguous
             last = lambda arr: as_c(np.moveaxis(np.asarray(arr, dtype=float), 0, -1))  # noqa
             wts = tuple(np.ascontiguousarray(w.T) for w in layers.weights)  # (n_out, n_in)
             bs = tuple(as_c(b) for b in layers.biases)
-            out = _kernel_batch(*physics, comps, wts, bs, kind, last(z0), last(v0), last(a0),
+            out = _kernel_batch(*physics, known, wts, bs, kind, last(z0), last(v0), last(a0),
                                 last(x0), last(buf0[:, ::-1, :]), as_c(pre), as_c(eta), times,
                                 *tail)
         else:  # ring buffer: row `head` is lag 0, row (head - l) % span is lag l
             ring = np.ascontiguousarray(buf0[:, ::-1, :])
-            out = _kernel(*physics, comps, *padded_layers(layers), kind, as_c(z0), as_c(v0),
+            out = _kernel(*physics, known, *padded_layers(layers), kind, as_c(z0), as_c(v0),
                           as_c(a0), as_c(x0), ring, as_c(pre), as_c(eta), times, *tail)
     _raise_failed(prob.forces, out[-2], out[-1])
     return out[:-2]
@@ -368,26 +371,26 @@ def _row(z, v, a, eta, case, k, chan_pos, eta_pos, row):
 
 
 @_inline
-def _remainder(v, x, quad, c_out, f):
-    """f += known force beyond the linear part: -quad |v| v - C_out x."""
+def _remainder(pre, case, k1, v, x, quad, c_out, f):
+    """f += prescribed ``pre[case, k1]`` and the known force beyond the linear part:
+    -quad |v| v - C_out x."""
     nd, ns = c_out.shape
     for d in range(nd):
-        acc = f[d] - quad[d] * abs(v[d]) * v[d]
+        acc = f[d] + pre[case, k1, d] - quad[d] * abs(v[d]) * v[d]
         for s in range(ns):
             acc -= c_out[d, s] * x[s]
         f[d] = acc
 
 
 @_inline
-def _known(comps, t, z, v, f, fs, tmp):
-    """f += the packed kernels' force at (t, z, v) (none: nothing done); returns the first
-    failing kernel's (status, index) or (0, -1)."""
-    if comps[1] == 0:
-        return 0, -1
+def _known(comps, t, z, v, f, fs, tmp, fail):
+    """f += the packed kernels' force at (t, z, v) (scratch fs, tmp); a failing kernel's
+    (status, index) into ``fail`` (the first one kept)."""
     status, m = sum_forces(comps, t, z, v, fs, tmp)
     for d in range(f.shape[0]):
         f[d] += fs[d]
-    return status, m
+    if status != 0 and fail[0] == 0:
+        fail[0], fail[1] = status, m
 
 
 @_inline
@@ -457,6 +460,7 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
     row = np.zeros(nch)
     h0, h1 = np.empty(width), np.empty(width)
     f, r, fs, tmp = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    fail = np.zeros(2, dtype=np.int64)
     z, v, a, x = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(ns)
     z1, v1, a1, x1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(ns)
     blew = np.zeros(nc, dtype=np.bool_)
@@ -471,23 +475,26 @@ def _kernel(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out, 
         n_case = n_steps
         for n in range(n_steps):
             k1 = k0 + n + 1
-            # pass 0 (predictor): network on the start-of-step window, the known explicit
-            # forces on the start state at t[k1] - dt; passes > 0: again on the predicted
-            # end-of-step state at t[k1]
-            for p in range(1 + corrections):
-                if p > 0:
-                    _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
-                _forward_case(ring, c, head, row, p > 0, window, stride, w_all, wt_all, b_all,
-                              sizes, kind, h0, h1, f)
-                for d in range(nd):
-                    f[d] += pre[c, k1, d]
-                _remainder(v if p == 0 else v1, x if p == 0 else x1, quad, c_out, f)
-                st, m = _known(comps, t[k1] - coef[0] if p == 0 else t[k1], z if p == 0 else z1,
-                               v if p == 0 else v1, f, fs, tmp)
-                if st != 0:  # as ode_force raising in the stepper
-                    return zs, vs, as_, xs, blew, n_done, st, m
+            # predictor: network on the start-of-step window, the known explicit forces on
+            # the start state at t[k1] - dt (as the stepper's t0)
+            _forward_case(ring, c, head, row, False, window, stride, w_all, wt_all, b_all,
+                          sizes, kind, h0, h1, f)
+            _remainder(pre, c, k1, v, x, quad, c_out, f)
+            if comps is not None:
+                _known(comps, t[k1] - coef[0], z, v, f, fs, tmp, fail)
+            _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
+                       z1, v1, a1, x1, r)
+            for _ in range(corrections):  # again on the predicted end-of-step state, at t[k1]
+                _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
+                _forward_case(ring, c, head, row, True, window, stride, w_all, wt_all,
+                              b_all, sizes, kind, h0, h1, f)
+                _remainder(pre, c, k1, v1, x1, quad, c_out, f)
+                if comps is not None:
+                    _known(comps, t[k1], z1, v1, f, fs, tmp, fail)
                 _integrate(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss,
                            x, z1, v1, a1, x1, r)
+            if fail[0] != 0:  # a kernel failed: as ode_force raising in the stepper
+                return zs, vs, as_, xs, blew, n_done, fail[0], fail[1]
             _row(z1, v1, a1, eta, c, k1 + lead, chan_pos, eta_pos, row)
             head = head + 1 if head + 1 < span else 0
             for ch in range(nch):
@@ -578,10 +585,8 @@ def _forward_b(feat, wts, bs, kind):
 
 
 @_inline
-def _explicit_force_b(fnet, pre, k1, z, v, x, quad, c_out, comps, t, f, scratch):
-    """f = network + prescribed ``pre[case, k1]`` - quad |v| v - C_out x + the packed
-    kernels' force at (t, z, v), (nd, nc); ``scratch`` four vectors (nd,). Returns the
-    first failing kernel's (status, index) or (0, -1)."""
+def _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f):
+    """f = network + prescribed ``pre[case, k1]`` - quad |v| v - C_out x, (nd, nc)."""
     nd, nc = f.shape
     ns = x.shape[0]
     for d in range(nd):
@@ -592,18 +597,21 @@ def _explicit_force_b(fnet, pre, k1, z, v, x, quad, c_out, comps, t, f, scratch)
             cds = c_out[d, s]
             for c in range(nc):
                 f[d, c] -= cds * x[s, c]
-    if comps[1] == 0:
-        return 0, -1
+
+
+@_inline
+def _known_b(comps, t, z, v, f, scratch, fail):
+    """:func:`_known` for all cases, arrays (nd, nc); ``scratch`` four vectors (nd,)."""
+    nd, nc = f.shape
     zc, vc, fs, tmp = scratch
     for c in range(nc):  # the kernels take one contiguous state
         for d in range(nd):
             zc[d], vc[d] = z[d, c], v[d, c]
         status, m = sum_forces(comps, t, zc, vc, fs, tmp)
-        if status != 0:
-            return status, m
+        if status != 0 and fail[0] == 0:
+            fail[0], fail[1] = status, m
         for d in range(nd):
             f[d, c] += fs[d]
-    return 0, -1
 
 
 @_inline
@@ -693,6 +701,7 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
     row = np.zeros((nch, nc))
     f, r = np.empty((nd, nc)), np.empty((nd, nc))
     scratch = (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd))
+    fail = np.zeros(2, dtype=np.int64)
     z, v, a, x = z0.copy(), v0.copy(), a0.copy(), x0.copy()
     z1, v1, a1, x1 = np.empty((nd, nc)), np.empty((nd, nc)), np.empty((nd, nc)), np.empty((ns, nc))
     blew = np.zeros(nc, dtype=np.bool_)
@@ -708,17 +717,18 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
             # state at t[k1] - dt; p > 0: again on the predicted end-of-step state at t[k1]
             if p == 0:
                 _gather_b(ring, head, row, False, window, stride, feat)
-                st, m = _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, z, v, x,
-                                          quad, c_out, comps, t[k1] - coef[0], f, scratch)
+                _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, v, x, quad, c_out, f)
             else:
                 _row_b(z1, v1, a1, eta, k1 + lead, chan_pos, eta_pos, row)
                 _gather_b(ring, head, row, True, window, stride, feat)
-                st, m = _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, z1, v1,
-                                          x1, quad, c_out, comps, t[k1], f, scratch)
-            if st != 0:  # as ode_force raising in the stepper
-                return zs, vs, as_, xs, blew, n_done, st, m
+                _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, v1, x1, quad, c_out, f)
+            if comps is not None:  # None: pruned at compile time (see run_explicit)
+                _known_b(comps, t[k1] - coef[0] if p == 0 else t[k1], z if p == 0 else z1,
+                         v if p == 0 else v1, f, scratch, fail)
             _integrate_b(scheme, lhs_inv, damping, stiffness, coef, z, v, a, f, p_ss, q_ss, x,
                          z1, v1, a1, x1, r)
+        if fail[0] != 0:  # a kernel failed: as ode_force raising in the stepper
+            return zs, vs, as_, xs, blew, n_done, fail[0], fail[1]
         head = head + 1 if head + 1 < span else 0
         _row_b(z1, v1, a1, eta, k1 + lead, chan_pos, eta_pos, row)
         for ch in range(nch):
