@@ -11,8 +11,10 @@ returns 0 (or a nonzero code whose message is ``CompiledForce.messages[code]``),
 component's data packed in one float64 and one int64 vector (layouts documented per kernel).
 Every kernel runs the arithmetic of its component's NumPy method (rounding differs by the
 summation order only, ~1e-16 relative; the tests compare both paths).
-:func:`hybridwsi.cummins.compiled.run_rk4` calls the kernels through Numba's first-class
-function type, so the loop is compiled once (cached on disk) for any mix of components.
+:func:`hybridwsi.cummins.compiled.run_rk4` and the hybrid rollout's loop
+(:func:`hybridwsi.surrogate.fast.run_explicit`) call the kernels through Numba's first-class
+function type (:func:`packed`, :func:`sum_forces`), so each loop is compiled once (cached on
+disk) for any mix of components.
 
 Without Numba (a core dependency, but the code runs without it) :data:`HAVE_NUMBA` is False,
 every ``compiled_force`` returns None and the stepping solver keeps its NumPy path.
