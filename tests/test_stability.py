@@ -21,7 +21,7 @@ from hybridwsi.diagnostic import (
     max_stable_dt,
     regress,
 )
-from hybridwsi.diagnostic.stability import surrogate_stability
+from hybridwsi.diagnostic.stability import MAP_RTOL, surrogate_stability
 from hybridwsi.errors import InputError
 from hybridwsi.history import make_history
 
@@ -183,7 +183,7 @@ def test_step_map_function_sets_the_largest_stable_dt_of_that_map(dt):
     assert rep.loosely_coupled.verdict == "unstable"
     assert rep.loosely_coupled.max_stable_dt == 0.0  # the lag-0 map's: another system
     assert rep.stable == (dt < limit)
-    assert rep.max_stable_dt == pytest.approx(limit, rel=1e-3)
+    assert (1 - MAP_RTOL) * limit <= rep.max_stable_dt <= limit  # the stable end, to 1 %
     assert (rep.max_stable_dt >= dt) == rep.stable
 
 

@@ -41,6 +41,8 @@ from hybridwsi.errors import InputError
 RE_RTOL = 1e-9
 #: spectral radius above 1 + this counts as unstable (below 1 − this as decaying)
 RHO_TOL = 1e-9
+#: relative precision of the largest stable Δt of a caller's step map (:func:`assess`)
+MAP_RTOL = 1e-2
 #: relative singular-value threshold for "singular" matrices
 SING_RTOL = 1e-12
 #: coupling modes of the hybrid solver (:mod:`hybridwsi.surrogate.coupled`)
@@ -420,8 +422,10 @@ def assess(step: CoupledStep, *,
         if step.dt is None:
             raise InputError("a step map function needs the step's dt")
         rho = _radius_of(step_map, step.dt)
+        # to 1 % (each evaluation is an eigenvalue problem of the whole map; the bracket's
+        # stable end is returned, so the limit errs on the safe side)
         dt_max = max_stable_dt(step, radius=lambda dt: _radius_of(step_map, dt),
-                               rho_tol=rho_tol, rtol=1e-4)
+                               rho_tol=rho_tol, rtol=MAP_RTOL)
     elif step_map is not None:
         rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
     return StabilityReport(step, _prescribed(step), _continuous(step), lagged, rho, ratio,
