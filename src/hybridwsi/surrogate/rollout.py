@@ -107,8 +107,8 @@ def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarra
         buf = np.concatenate([stepper.row(z, v, a, 0.0)[:, None, :], rest], axis=1)
         return State(z, v, a, x, buf)
 
-    def pack(s: State) -> np.ndarray:
-        return np.concatenate([s.z, s.v, s.a, s.x, s.buf[:, :-1].reshape(len(s.z), -1)], axis=1)
+    def pack(s: State) -> np.ndarray:  # lag 0 is (z, v, a): the carried lags are 1 … w−1
+        return np.concatenate([s.z, s.v, s.a, s.x, s.buf[:, 1:].reshape(len(s.z), -1)], axis=1)
 
     basis = np.eye(dim)  # all basis vectors as one batch: the map is linear
     out = pack(stepper.step(unpack(basis), dt, np.zeros((dim, nd)), np.zeros((dim, spec.n_probe))))
