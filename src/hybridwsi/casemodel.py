@@ -426,8 +426,8 @@ def known_linear_drag(case: Case, dofs: Sequence[str]) -> list[KnownComponent]:
     """The case's member drag linearised (:func:`linearised_member_drag`) as a known damping
     of a hybrid, when its ``[hybrid] known_linear_drag`` is on (else nothing): the network then
     learns the drag's departure from it, and the coupled step keeps the physical damping of
-    the slow modes whatever sign the network's ∂F/∂ż takes (docs/OC4_SEMI.md, "Predicted vs
-    observed stability")."""
+    the slow modes whatever sign the network's ∂F/∂ż takes (docs/OC4_SEMI.md, "The damping
+    the network learns")."""
     if not case.get("hybrid", {}).get("known_linear_drag", False):
         return []
     idx = index(dofs)
