@@ -5,9 +5,10 @@ CaseModel.simulate`: radiation state space, MoorPy's tabulated mooring F(q) − 
 member's Morison drag on the relative velocity with the Airy kinematics of the sea) in
 long-crested JONSWAP seas travelling towards 30°. The partition is the 6×6 diagnostic's
 ``recommended`` one (:data:`hybridwsi.report.fowt_semi.SEMI_RESIDUAL`): hydrostatics, A∞,
-radiation memory and excitation known (:data:`SEMI_HYBRID_PARTITION`), plus the case's mooring
-linearised about rest (−K q; :func:`hybridwsi.surrogate.certified.case_linear`), so the network
-learns ``member drag + (tabulated mooring − (−K q))``. Training, certificate and held-out
+radiation memory and excitation known (:data:`SEMI_HYBRID_PARTITION`), plus the case's linear
+models (:func:`hybridwsi.surrogate.certified.case_linear`): the mooring linearised about rest
+(−K q) and, with ``[hybrid] known_linear_drag``, the member drag's Borgman linearisation
+(−B_lin ż), so the network learns :data:`LEFT_TO_NETWORK`. Training, certificate and held-out
 errors are :func:`hybridwsi.surrogate.certified.train_model` (the ``hybridwsi hybrid --case``
 path, network settings of the case's ``[hybrid.network]``); the held-out seas are rolled out
 with the same pipeline from the reference's first window (no training loop here).
