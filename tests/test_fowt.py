@@ -173,6 +173,12 @@ def test_semi_hybrid_in_the_report(quick_results):
     predicted = hyb["certificate"]["spectral_radius"] <= 1.0 + 1e-6
     assert hyb["predicted_stable"] == predicted
     assert hyb["agree"] == (hyb["predicted_stable"] == hyb["observed_stable"])
+    # the certificate's largest stable Δt is on the side of its verdict at the model's Δt
+    top = hyb["certificate"]["max_stable_dt"]
+    assert (top is None or top >= hyb["settings"]["dt"]) == hyb["predicted_stable"]
+    # observed: a perturbation of the hybrid decays (σ < 0) exactly when observed stable
+    assert all((r["perturbation_rate"] <= 0.0) == r["observed_stable"]
+               for r in hyb["held_out"] if not r["blew_up"])
     model = _json(folder / "hybrid_model", "model.json")
     assert model["case"]["sha256"] == load_case("oc4_semi").sha256 and model["dofs"] == dofs
     ds = xr.open_dataset(folder / "hybrid_rollout.nc")

@@ -289,13 +289,15 @@ def test_six_dof_diagnostic_in_an_oblique_sea(system):
 # ----------------------------------------------------------------------- the hybrid (item 5)
 def test_semi_hybrid_learns_only_drag_and_mooring_nonlinearity(system):
     """The semi's hybrid on a small configuration (two 120 s seas at 30°, a tiny network):
-    the partition's known components are the four candidates and MoorPy's −K q, so the
-    residual the network learns is the member drag plus the mooring's departure from −K q,
+    the partition's known components are the four candidates, MoorPy's −K q and the member
+    drag's Borgman linearisation −B_lin ż (``[hybrid] known_linear_drag``), so the residual
+    the network learns is the drag's departure from −B_lin ż plus the mooring's from −K q,
     exactly up to the known radiation memory's re-integration of the recorded ż (checked
     against the recorded F_rad_mem); A∞ is known and z̈ is no input, so the learned force
     carries no inertia (added-mass ratio 0: no added-mass instability of the lagged
     coupling); the held-out rollout reports an error for each of the six DOFs."""
     pytest.importorskip("torch")
+    from hybridwsi.casemodel import linearised_member_drag
     from hybridwsi.diagnostic.partition import build_candidates
     from hybridwsi.forces import MooringSystem
     from hybridwsi.report import fowt_semi_hybrid as fsh
@@ -318,8 +320,11 @@ def test_semi_hybrid_learns_only_drag_and_mooring_nonlinearity(system):
     memory = build_candidates(hist, model.coeffs, ("radiation_memory",))["radiation_memory"]
     re_integration = memory.force(hist) - hist["F_rad_mem"].values
     k = MooringSystem.from_case(CASE).stiffness()
+    b_lin = linearised_member_drag(CASE)
+    assert np.all(np.diag(b_lin) > 0)  # a damping in every DOF
     drag = hist["F_morison"].values
-    learned = drag + hist["F_mooring"].values + hist["z"].values @ k.T
+    learned = (drag + hist["F_mooring"].values + hist["z"].values @ k.T
+               + hist["zdot"].values @ b_lin.T)
     assert np.abs(drag).max(0).min() > 0  # the drag acts on every DOF in a 30° sea
     assert np.allclose(f_bb + re_integration, learned, rtol=0,
                        atol=1e-8 * np.abs(learned).max())

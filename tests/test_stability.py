@@ -21,7 +21,7 @@ from hybridwsi.diagnostic import (
     max_stable_dt,
     regress,
 )
-from hybridwsi.diagnostic.stability import surrogate_stability
+from hybridwsi.diagnostic.stability import MAP_RTOL, surrogate_stability
 from hybridwsi.errors import InputError
 from hybridwsi.history import make_history
 
@@ -138,6 +138,53 @@ def test_symplectic_euler_limit_is_two_over_omega():
 
 def test_newmark_average_acceleration_is_unconditionally_stable():
     assert max_stable_dt(CoupledStep(M, A_INF, 0.0, C_HS, scheme="newmark")) == math.inf
+
+
+def test_largest_stable_dt_agrees_with_the_verdict_when_small_steps_are_unstable():
+    """Newmark, z̈ + z = F lagged, F = β ż + γ z with a learned anti-damping β = 0.01 N s/m and
+    γ = 0.5 N/m: the continuous system is unstable (Re λ = β/2 > 0), but the one-step lag of
+    γ z acts as a damping γ Δt (F(t) ≈ γ z(t − Δt) ≈ γ z − γ Δt ż), so the lagged step is
+    stable above Δt* = β/γ = 0.02 s (to first order) and unstable below. At Δt = 2Δt* the
+    verdict is stable, so the largest stable Δt must be at least Δt (it was 0: the search
+    started at the unstable small steps)."""
+    beta, gamma = 0.01, 0.5
+    dt_star = beta / gamma
+    step = CoupledStep(1.0, 0.0, 0.0, 1.0, 0.0, beta, gamma, scheme="newmark")
+    rho = [float(np.max(np.abs(np.linalg.eigvals(amplification_matrix(step, f * dt_star)))))
+           for f in (0.9, 1.1)]
+    assert rho[0] > 1.0 > rho[1]  # the closed-form threshold within 10 %
+    assert assess(step.with_dt(dt_star)).continuous.verdict == "unstable"
+    above = assess(step.with_dt(2 * dt_star))
+    assert above.stable and above.loosely_coupled.verdict == "stable"
+    assert above.max_stable_dt >= 2 * dt_star
+    assert max_stable_dt(step.with_dt(2 * dt_star)) >= 2 * dt_star
+    below = assess(step.with_dt(0.5 * dt_star))
+    assert not below.stable and below.max_stable_dt < 0.5 * dt_star
+
+
+def _symplectic_map(damping: float, stiffness: float, dt: float) -> np.ndarray:
+    """Semi-implicit Euler on (z, ż) of z̈ + b ż + c z = 0 (unit mass), b explicit."""
+    return np.array([[1.0 - dt**2 * stiffness, dt * (1.0 - dt * damping)],
+                     [-dt * stiffness, 1.0 - dt * damping]])
+
+
+@pytest.mark.parametrize("dt", [1.0, 2.0])
+def test_step_map_function_sets_the_largest_stable_dt_of_that_map(dt):
+    """A rollout's own map holds damping the lag-0 step leaves out (the radiation memory's
+    states): the lag-0 step (learned anti-damping β = 0.01, no known damping, Newmark) is
+    unstable at every Δt, the caller's map (semi-implicit Euler on z̈ + (b − β) ż + z = 0,
+    b = 0.5) is stable up to its closed-form limit Δt_max = (√(b'² + 4c) − b')/c, b' = b − β
+    (Jury: the root λ = −1 at c Δt² + 2 b' Δt − 4 = 0). The report's Δt limit is that map's,
+    on the side of the verdict at Δt."""
+    b, beta, c = 0.5, 0.01, 1.0
+    limit = (math.sqrt((b - beta) ** 2 + 4 * c) - (b - beta)) / c
+    step = CoupledStep(1.0, 0.0, 0.0, c, 0.0, beta, 0.0, dt=dt, scheme="newmark")
+    rep = assess(step, step_map=lambda h: _symplectic_map(b - beta, c, h))
+    assert rep.loosely_coupled.verdict == "unstable"
+    assert rep.loosely_coupled.max_stable_dt == 0.0  # the lag-0 map's: another system
+    assert rep.stable == (dt < limit)
+    assert (1 - MAP_RTOL) * limit <= rep.max_stable_dt <= limit  # the stable end, to 1 %
+    assert (rep.max_stable_dt >= dt) == rep.stable
 
 
 def test_lagged_step_tracks_the_analytic_oscillator():

@@ -69,6 +69,43 @@ def test_rollout_with_exact_damping_network_matches_analytic_decay():
     np.testing.assert_allclose(implicit.histories[0]["z"].values[:, 0], exact, atol=0.005 * z0)
 
 
+def test_predicted_map_is_the_map_the_rollout_runs_with_lagged_taps():
+    """A linear network with lagged taps (window 3, stride 2: z and ż now, 0.02 s and 0.04 s
+    ago): iterating the certificate's one-step map from the rollout's start reproduces the
+    rollout step by step (a linear network makes the rollout exactly linear). The map used
+    to carry the buffer's lags 0 … w−2 instead of 1 … w−1, so the network in the map read
+    every tap one sample late (on the OC4 semi that turned a decaying slow mode, −1.8e-3 1/s,
+    into a growing one, +6e-4 1/s)."""
+    from hybridwsi.surrogate.physics import BatchedPhysics
+    from hybridwsi.surrogate.rollout import _linear_map, _start
+
+    dt = 0.01
+    t = np.arange(0.0, 1.0 + dt / 2, dt)
+    wn = np.sqrt(C / M)
+    case = make_history(t, 0.01 * np.cos(wn * t), -0.01 * wn * np.sin(wn * t),
+                        -0.01 * wn**2 * np.cos(wn * t), mass=M)
+    net = ForceNetwork(hidden=(), max_epochs=1, inputs=("z", "zdot"), window=3, stride=2)
+    net.fit(case, lambda h: 1.0 * h["z"].values)
+    w = np.array([-30.0, -1.0, 10.0, 0.5, 15.0, -0.5])  # (z, ż) at lags 0, 2, 4 samples
+    with torch.no_grad():
+        wt = torch.tensor(w, dtype=torch.float64)
+        net._ys[:] = 1.0
+        net._ym[:] = 0.0
+        net.model_[0].weight[:] = (wt * net._xs)[None, :]
+        net.model_[0].bias[:] = (wt * net._xm).sum()
+    phys = BatchedPhysics(M, [Hydrostatic(C)], 1)
+    g = _linear_map(phys.linearised(), net.spec_, dt, "lagged", w[None, :])
+    start, _ = _start(phys, net.spec_, [case])
+    state = np.concatenate([start.z[0], start.v[0], start.a[0], start.buf[0, 1:].ravel()])
+    res = rollout(net, [case], mass=M, known=[Hydrostatic(C)], mode="lagged", check=False,
+                  compiled=False, n_steps=60)
+    z = res.histories[0]["z"].values[:, 0]  # from the end of the first window on
+    assert np.all(np.isfinite(z)) and np.max(np.abs(z)) > 1e-3
+    for k in range(1, 61):
+        state = g @ state
+        assert state[0] == pytest.approx(z[k], rel=1e-9, abs=1e-12), k
+
+
 @pytest.mark.parametrize("alpha, beta, gamma", [(0.0, -3.0, 0.0), (-3.5, 0.5, 20.0), (6.0, -1.0, 0.0)])
 def test_predicted_map_matches_stability_module(alpha, beta, gamma):
     """Window-1 linear network: our one-step map is the stability module's amplification map."""

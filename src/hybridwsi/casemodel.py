@@ -60,11 +60,12 @@ from hybridwsi import cummins
 from hybridwsi.bodies import FloatingSphere, body_from_dict
 from hybridwsi.cases import Case, load_case, mooring_model, with_values
 from hybridwsi.cummins.forcing import elevation_attrs
-from hybridwsi.dofs import check_dofs, index
+from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError, SolverError
 from hybridwsi.forces import (
     Hydrostatic,
     KnownComponent,
+    LinearDamping,
     MooringForce,
     MemberMorison,
     MooringSystem,
@@ -402,6 +403,35 @@ def linear_components(case: Case, dofs: Sequence[str], *, stiffness: np.ndarray 
     if case["forces"]["linear_damping"]:
         out.append(additional_damping(case, dofs))
     return out
+
+
+def linearised_member_drag(case: Case, amplitudes: Mapping[str, float] | None = None
+                           ) -> np.ndarray:
+    """Σ over DOFs of the Borgman-linearised member drag for a harmonic motion of that DOF
+    alone at its velocity amplitude (``[linear_drag]`` of the case, [m/s, rad/s]): a 6×6
+    damping matrix [N s/m, N s/rad, N m s/m, N m s/rad] (rows = force DOF)."""
+    amps = dict(case.get("linear_drag", {}) if amplitudes is None else amplitudes)
+    if not amps:
+        raise InputError("no velocity amplitudes for the drag linearisation ([linear_drag])")
+    drag = MemberMorison.from_case(case, RIGID_DOFS, inertia=False)
+    total = np.zeros((6, 6))
+    for dof, value in amps.items():
+        a = np.zeros(6)
+        a[RIGID_DOFS.index(dof)] = float(value)
+        total += drag.linearise_at(a).linear_coefficients(6)[1]
+    return total
+
+
+def known_linear_drag(case: Case, dofs: Sequence[str]) -> list[KnownComponent]:
+    """The case's member drag linearised (:func:`linearised_member_drag`) as a known damping
+    of a hybrid, when its ``[hybrid] known_linear_drag`` is on (else nothing): the network then
+    learns the drag's departure from it, and the coupled step keeps the physical damping of
+    the slow modes whatever sign the network's ∂F/∂ż takes (docs/OC4_SEMI.md, "The damping
+    the network learns")."""
+    if not case.get("hybrid", {}).get("known_linear_drag", False):
+        return []
+    idx = index(dofs)
+    return [LinearDamping(linearised_member_drag(case)[np.ix_(idx, idx)])]
 
 
 def elevation_wave(coeffs: xr.Dataset, path: str | os.PathLike, column: str | None = None,

@@ -546,6 +546,8 @@ _HYBRID = Table(fields={
                              doc="relative force accuracies of the identifiability test"),
     "perturbation": positive("", "initial offset of the lagged runs, x std(z)"),
     "mode": Text(doc="coupling of the rollout (lagged, corrected, implicit)"),
+    "known_linear_drag": Boolean(doc="the member drag linearised ([linear_drag]) is known: "
+                                 "the network learns its departure from it"),
     "partitions": MapOf(value=Table(fields={"inputs": _INPUTS, **_NETWORK_FIELDS}),
                         doc="network settings per partition, over [hybrid.network]"),
     "network": Table(fields=_NETWORK_FIELDS, doc="network settings")},

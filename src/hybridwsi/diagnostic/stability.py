@@ -25,7 +25,7 @@ pencil ``([0, I; −C, −B], [I, 0; 0, M])`` (infinite ones when M is singular)
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -41,6 +41,8 @@ from hybridwsi.errors import InputError
 RE_RTOL = 1e-9
 #: spectral radius above 1 + this counts as unstable (below 1 − this as decaying)
 RHO_TOL = 1e-9
+#: relative precision of the largest stable Δt of a caller's step map (:func:`assess`)
+MAP_RTOL = 1e-2
 #: relative singular-value threshold for "singular" matrices
 SING_RTOL = 1e-12
 #: coupling modes of the hybrid solver (:mod:`hybridwsi.surrogate.coupled`)
@@ -378,7 +380,8 @@ def _min_sym_eig(m: np.ndarray) -> float:
 
 
 # --------------------------------------------------------------------------- assessment
-def assess(step: CoupledStep, *, step_map: np.ndarray | None = None,
+def assess(step: CoupledStep, *,
+           step_map: np.ndarray | Callable[[float], np.ndarray] | None = None,
            rho_tol: float = RHO_TOL) -> StabilityReport:
     """Judge a coupled step in the three settings (docs/THEORY.md §4): the one assessment.
 
@@ -386,12 +389,19 @@ def assess(step: CoupledStep, *, step_map: np.ndarray | None = None,
     ----------
     step : CoupledStep
         Mass, known part, learned part, Δt, scheme, mode.
-    step_map : ndarray, optional
-        Amplification matrix of the caller's own step map at ``step.dt`` (a rollout whose
-        network has several feature lags); its spectral radius is the report's. Default: the
-        map of :func:`hybridwsi.diagnostic.integrators.lagged_step` (setting c).
+    step_map : ndarray or callable, optional
+        The caller's own step map (a rollout whose network has several feature lags and whose
+        known part has internal states): its amplification matrix at ``step.dt``, or a
+        function ``dt -> matrix``. Its spectral radius at ``step.dt`` is the report's; given
+        as a function, the report's ``max_stable_dt`` is that of the same map
+        (:func:`max_stable_dt` with its radius), so the two agree (``max_stable_dt ≥ dt``
+        exactly when stable at ``dt``). Given as a matrix (one Δt only), the report's
+        ``max_stable_dt`` is setting (c)'s, of the lag-0 map, which can disagree with the
+        verdict. Default: the map of :func:`hybridwsi.diagnostic.integrators.lagged_step`
+        (setting c).
     rho_tol : float
-        Margin on the spectral radius of :attr:`StabilityReport.stable`.
+        Margin on the spectral radius of :attr:`StabilityReport.stable` (and of
+        ``max_stable_dt`` and setting (c)'s verdict).
 
     Returns
     -------
@@ -405,12 +415,26 @@ def assess(step: CoupledStep, *, step_map: np.ndarray | None = None,
     if _is_singular(step.inertia):
         raise InputError("m + A_k is singular: the ODE cannot be solved for the acceleration")
     ratio = added_mass_ratio(step.mass, step.known_mass, step.alpha)
-    lagged = None if step.dt is None else _loosely_coupled(step, ratio)
+    lagged = None if step.dt is None else _loosely_coupled(step, ratio, rho_tol)
     rho = None if lagged is None else lagged.spectral_radius
-    if step_map is not None:
+    dt_max = None if lagged is None else lagged.max_stable_dt
+    if callable(step_map):
+        if step.dt is None:
+            raise InputError("a step map function needs the step's dt")
+        rho = _radius_of(step_map, step.dt)
+        # to 1 % (each evaluation is an eigenvalue problem of the whole map; the bracket's
+        # stable end is returned, so the limit errs on the safe side)
+        dt_max = max_stable_dt(step, radius=lambda dt: _radius_of(step_map, dt),
+                               rho_tol=rho_tol, rtol=MAP_RTOL)
+    elif step_map is not None:
         rho = float(np.max(np.abs(np.linalg.eigvals(step_map))))
     return StabilityReport(step, _prescribed(step), _continuous(step), lagged, rho, ratio,
-                           None if lagged is None else lagged.max_stable_dt, float(rho_tol))
+                           dt_max, float(rho_tol))
+
+
+def _radius_of(step_map: Callable[[float], np.ndarray], dt: float) -> float:
+    """Spectral radius of ``step_map(dt)``."""
+    return float(np.max(np.abs(np.linalg.eigvals(step_map(dt)))))
 
 
 def added_mass_ratio(mass: np.ndarray, known_mass: np.ndarray, alpha: np.ndarray) -> float:
@@ -511,61 +535,91 @@ def _spectral_radius(step: CoupledStep, dt: float) -> float:
 
 
 def max_stable_dt(step: CoupledStep, *, dt_range: tuple[float, float] | None = None,
-                  n_grid: int = 60, rtol: float = 1e-6) -> float:
-    """Largest Δt [s] such that every tested smaller Δt has spectral radius ≤ 1 (+ ``RHO_TOL``).
+                  n_grid: int = 60, rtol: float = 1e-6,
+                  radius: Callable[[float], float] | None = None,
+                  rho_tol: float = RHO_TOL) -> float:
+    """Largest stable Δt [s] of a step map, consistent with the verdict at ``step.dt``.
 
-    Scans ``n_grid`` log-spaced steps over ``dt_range`` (default ``1e-4/ω`` to ``1e2/ω`` with ω
-    the largest |continuous eigenvalue| of the known and of the surrogate-in-the-loop system),
-    then bisects the first stable→unstable bracket to relative precision ``rtol``.
-    Returns ``inf`` when stable at every tested step and ``0`` when unstable at the smallest —
-    always the case when ``added_mass_ratio ≥ 1`` (as Δt → 0 the map keeps the eigenvalues of
-    ``(m + A_k)⁻¹ α``).
+    Stable means spectral radius ≤ 1 + ``rho_tol`` (the margin of
+    :attr:`StabilityReport.stable`). The map is ``radius(dt)`` (the spectral radius of the
+    caller's own step map at ``dt``, e.g. a rollout's with every feature lag and internal
+    state), default the amplification matrix of :func:`lagged_step` for ``step``.
+
+    - ``step.dt`` set and the map stable there: the upper end of the stable interval that
+      contains ``step.dt`` (≥ ``step.dt``; ``inf`` when stable at every tested larger Δt).
+      A lagged surrogate can be unstable at small Δt and stable at larger ones (the lag of a
+      learned stiffness adds damping ∝ Δt that can outweigh a learned anti-damping), so the
+      interval need not reach down to 0.
+    - otherwise: the largest Δt such that every tested smaller Δt is stable (``0`` when
+      unstable at the smallest; always the case for the default map when
+      ``added_mass_ratio ≥ 1``: as Δt → 0 it keeps the eigenvalues of ``(m + A_k)⁻¹ α``).
+
+    So ``max_stable_dt(step) ≥ step.dt`` exactly when the map is stable at ``step.dt``.
+    Scans ``n_grid`` log-spaced steps over ``dt_range`` (default ``1e-4/ω`` to ``1e2/ω``, ω the
+    largest |continuous eigenvalue| of the known and of the surrogate-in-the-loop system;
+    above ``step.dt`` from ``step.dt`` on), stopping at the first unstable one, then bisects
+    the stable→unstable bracket to relative precision ``rtol``.
     """
     if _is_singular(step.inertia):
         raise InputError("m + A_k is singular: the ODE cannot be solved for the acceleration")
-    if added_mass_ratio(step.mass, step.known_mass, step.alpha) >= 1.0:
-        return 0.0
-    if dt_range is None:
-        lam = np.concatenate([
-            system_eigenvalues(step.inertia, step.known_damping, step.known_stiffness),
-            system_eigenvalues(step.inertia - step.alpha, step.known_damping - step.beta,
-                               step.known_stiffness - step.gamma)])
-        lam = np.abs(lam[np.isfinite(lam)])
-        omega = float(lam.max()) if lam.size and lam.max() > 0 else 1.0
-        dt_range = (1e-4 / omega, 1e2 / omega)
-    lo, hi = map(float, dt_range)
+    lo, hi = map(float, _dt_range(step) if dt_range is None else dt_range)
     if not (0 < lo < hi and math.isfinite(hi)):
         raise InputError(f"dt_range must satisfy 0 < low < high < inf, got {dt_range}")
+    if radius is None:
+        if added_mass_ratio(step.mass, step.known_mass, step.alpha) >= 1.0:
+            return 0.0
+        radius = lambda dt: _spectral_radius(step, dt)  # noqa: E731
 
     def unstable(dt: float) -> bool:
-        return _spectral_radius(step, dt) > 1.0 + RHO_TOL
+        return radius(dt) > 1.0 + rho_tol
 
-    grid = np.geomspace(lo, hi, n_grid)
-    bad = [unstable(dt) for dt in grid]
-    if not any(bad):
+    if step.dt is not None and not unstable(step.dt):
+        if step.dt >= hi:
+            return math.inf
+        n_above = max(2, int(round(n_grid * math.log(hi / step.dt) / math.log(hi / lo))) + 1)
+        grid = np.geomspace(step.dt, hi, n_above)
+    else:
+        grid = np.geomspace(lo, hi, n_grid)
+    good = None
+    for dt in map(float, grid):
+        if unstable(dt):
+            break
+        good = dt
+    else:
         return math.inf
-    i = bad.index(True)
-    if i == 0:
+    if good is None:
         return 0.0
-    good, badt = float(grid[i - 1]), float(grid[i])
+    badt = dt
     while badt / good - 1.0 > rtol:
         mid = math.sqrt(good * badt)
         good, badt = (good, mid) if unstable(mid) else (mid, badt)
     return good
 
 
-def _loosely_coupled(step: CoupledStep, ratio: float) -> SettingVerdict:
+def _dt_range(step: CoupledStep) -> tuple[float, float]:
+    """Default Δt range [s] of :func:`max_stable_dt`: ``1e-4/ω`` to ``1e2/ω``."""
+    lam = np.concatenate([
+        system_eigenvalues(step.inertia, step.known_damping, step.known_stiffness),
+        system_eigenvalues(step.inertia - step.alpha, step.known_damping - step.beta,
+                           step.known_stiffness - step.gamma)])
+    lam = np.abs(lam[np.isfinite(lam)])
+    omega = float(lam.max()) if lam.size and lam.max() > 0 else 1.0
+    return 1e-4 / omega, 1e2 / omega
+
+
+def _loosely_coupled(step: CoupledStep, ratio: float, rho_tol: float = RHO_TOL
+                     ) -> SettingVerdict:
     """(c) at ``step.dt``: the amplification matrix of :func:`lagged_step` (state ``[z, ż,
-    z̈_lag]``): ``stable`` (spectral radius < 1), ``marginal`` (= 1 within ``RHO_TOL``) or
-    ``unstable``, with :func:`max_stable_dt`."""
+    z̈_lag]``): ``stable`` (spectral radius < 1), ``marginal`` (= 1 within ``rho_tol``) or
+    ``unstable``, with :func:`max_stable_dt` of the same map and margin."""
     dt, scheme = step.dt, step.scheme
     lam = np.linalg.eigvals(amplification_matrix(step))
     rho = float(np.max(np.abs(lam)))
-    dt_max = max_stable_dt(step)
-    if rho > 1.0 + RHO_TOL:
+    dt_max = max_stable_dt(step, rho_tol=rho_tol)
+    if rho > 1.0 + rho_tol:
         verdict = "unstable"
         msg = f"unstable at Δt = {dt:.4g} s: spectral radius {rho:.6g} > 1"
-    elif rho >= 1.0 - RHO_TOL:
+    elif rho >= 1.0 - rho_tol:
         verdict = "marginal"
         msg = f"marginal at Δt = {dt:.4g} s: spectral radius {rho:.6g} = 1 (errors do not decay)"
     else:

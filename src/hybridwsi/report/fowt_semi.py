@@ -37,13 +37,12 @@ import scipy.linalg
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from hybridwsi.casemodel import case_coefficients, radiation_ss
+from hybridwsi.casemodel import case_coefficients, linearised_member_drag, radiation_ss
 from hybridwsi.cases import Case, load_case
 from hybridwsi.cummins import simulate
 from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.regression import regress
 from hybridwsi.dofs import RIGID_DOFS, motion_unit
-from hybridwsi.errors import InputError
 from hybridwsi.files import _jsonable, atomic_write
 from hybridwsi.forces import Hydrostatic, KnownComponent, LinearDamping, MemberMorison, \
     MooringForce, MooringSystem
@@ -104,18 +103,9 @@ class SemiSystem:
 
 def linearised_drag(case: Mapping[str, Any], amplitudes: Mapping[str, float] | None = None
                     ) -> np.ndarray:
-    """Σ over DOFs of the Borgman-linearised member drag for a harmonic motion of that DOF
-    alone at its velocity amplitude (``[linear_drag]`` of the case, [m/s, rad/s]), (6, 6)."""
-    amps = dict(case.get("linear_drag", {}) if amplitudes is None else amplitudes)
-    if not amps:
-        raise InputError("no velocity amplitudes for the drag linearisation ([linear_drag])")
-    drag = MemberMorison.from_case(case, RIGID_DOFS, inertia=False)
-    total = np.zeros((6, 6))
-    for dof, value in amps.items():
-        a = np.zeros(6)
-        a[RIGID_DOFS.index(dof)] = float(value)
-        total += drag.linearise_at(a).linear_coefficients(6)[1]
-    return total
+    """Σ over DOFs of the Borgman-linearised member drag, (6, 6)
+    (:func:`hybridwsi.casemodel.linearised_member_drag`)."""
+    return linearised_member_drag(case, amplitudes)
 
 
 def radiation_state_space(case: Mapping[str, Any], coeffs: xr.Dataset):

@@ -8,7 +8,8 @@ The folder holds
 - ``model.json`` — what the hybrid solver needs and what it was certified for: the hybridwsi
   version, the case (name and content SHA-256), the DOFs, the partition and its known
   components (the partition's candidates plus the case's linearised mooring and linear
-  damping, :func:`case_linear`), the mass, Δt, the coupling (mode, corrections), the feature settings, the
+  damping, and with ``[hybrid] known_linear_drag`` its linearised member drag,
+  :func:`case_linear`), the mass, Δt, the coupling (mode, corrections), the feature settings, the
   SHA-256 of every training file, the training envelope (per DOF the range of z, ż, z̈; per
   network channel the range of its values), the held-out errors per DOF, and the stability
   certificate (spectral radius and added-mass ratio at the certified Δt, the largest stable Δt,
@@ -44,7 +45,13 @@ import xarray as xr
 
 from hybridwsi import cummins
 from hybridwsi._meta import version
-from hybridwsi.casemodel import CaseModel, linear_components, radiation_ss, record_wave
+from hybridwsi.casemodel import (
+    CaseModel,
+    known_linear_drag,
+    linear_components,
+    radiation_ss,
+    record_wave,
+)
 from hybridwsi.cummins.forcing import elevation_attrs, excitation
 from hybridwsi.diagnostic import stability
 from hybridwsi.diagnostic.partition import build_candidates
@@ -178,8 +185,11 @@ def case_linear(model: CaseModel) -> list:
     (:func:`hybridwsi.casemodel.linear_components`), so that the network learns only their
     nonlinear remainder (with the drag). Measured on OC3-Hywind (surge, heave, pitch; 2 × 1800 s
     training, a third sea): RMS error of surge 0.85 % with them, 6.6 % without (the network
-    then carries the whole surge mooring stiffness and damping of the 125 s surge mode)."""
-    return linear_components(model.case, model.dofs)
+    then carries the whole surge mooring stiffness and damping of the 125 s surge mode).
+    With the case's ``[hybrid] known_linear_drag`` on, also its member drag linearised
+    (:func:`hybridwsi.casemodel.known_linear_drag`; the OC4 semi: docs/OC4_SEMI.md)."""
+    return [*linear_components(model.case, model.dofs),
+            *known_linear_drag(model.case, model.dofs)]
 
 
 # ------------------------------------------------------------------------------- envelope

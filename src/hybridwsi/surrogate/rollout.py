@@ -109,8 +109,8 @@ def _linear_map(phys: BatchedPhysics, spec, dt: float, mode: str, jac: np.ndarra
         buf = np.concatenate([stepper.row(z, v, a, 0.0)[:, None, :], rest], axis=1)
         return State(z, v, a, x, buf)
 
-    def pack(s: State) -> np.ndarray:
-        return np.concatenate([s.z, s.v, s.a, s.x, s.buf[:, :-1].reshape(len(s.z), -1)], axis=1)
+    def pack(s: State) -> np.ndarray:  # lag 0 is (z, v, a): the carried lags are 1 … w−1
+        return np.concatenate([s.z, s.v, s.a, s.x, s.buf[:, 1:].reshape(len(s.z), -1)], axis=1)
 
     basis = np.eye(dim)  # all basis vectors as one batch: the map is linear
     out = pack(stepper.step(unpack(basis), dt, np.zeros((dim, nd)), np.zeros((dim, spec.n_probe))))
@@ -168,14 +168,18 @@ def check_stability(
     phys = BatchedPhysics(mass, known, net.n_dof_)
     x = np.concatenate([build_features(h, net.spec_)[::max(1, stride)] for h in refs])
     jac = feature_jacobian(net, x).mean(0)
-    step_map = _linear_map(phys.linearised(), net.spec_, dt, mode, jac, scheme, corrections)
+    lin_phys = phys.linearised()
+
+    def step_map(at_dt: float) -> np.ndarray:  # the same map at any Δt: max_stable_dt's
+        return _linear_map(lin_phys, net.spec_, at_dt, mode, jac, scheme, corrections)
+
     lin = linearise(net, refs[0], stride=stride)
     if len(refs) > 1:
         lins = [linearise(net, h, stride=stride) for h in refs]
         lin.alpha, lin.beta, lin.gamma = (np.mean([getattr(s, k) for s in lins], 0)
                                           for k in ("alpha", "beta", "gamma"))
-    # docs/THEORY.md §4b-c for the network's lag-0 sensitivities, with the spectral radius of
-    # the rollout's own map (every lag)
+    # docs/THEORY.md §4b-c for the network's lag-0 sensitivities, with the spectral radius and
+    # the largest stable Δt of the rollout's own map (every lag, the known part's states)
     step = stability.CoupledStep.from_components(
         mass, known, lin, dt=dt, scheme=scheme, mode=mode,
         corrections=corrections if mode == "corrected" else 0)
