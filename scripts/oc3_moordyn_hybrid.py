@@ -82,10 +82,11 @@ def simulate_all(work: Path, dur: float, long_dur: float) -> int:
     return 0
 
 
-def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: str
-          ) -> HybridPipeline:
+def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: str,
+          ship: bool = True) -> HybridPipeline:
     """The network of ``partition`` through the pipeline (resumed from
-    ``work/network_<partition>.*`` when there); each history prepared with its own wind."""
+    ``work/network_<partition>.*`` when there; also written to the package with ``ship``);
+    each history prepared with its own wind."""
     hs = [fmh.prepared(h, fmh.case_model(fmh.TRAIN[n], "table")) for n, h in refs.items()]
     known = fmh.known_part(hs[0], model, partition, rotor=False)
     net_cfg = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS}
@@ -100,14 +101,17 @@ def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: 
     start = time.perf_counter()
     pipe.fit(hs, model.coeffs)
     pipe.network_.save(path)
-    pipe.network_.save(fmh.NETWORKS[partition])
+    if ship:
+        pipe.network_.save(fmh.NETWORKS[partition])
     print(f"{partition} trained in {time.perf_counter() - start:.0f} s", flush=True)
     return pipe
 
 
-def train_head(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> ForceNetwork:
+def train_head(work: Path, refs: dict[str, xr.Dataset], model: CaseModel,
+               ship: bool = True) -> ForceNetwork:
     """The tension head (:func:`fmh.fit_tension_head`) on the prepared training references,
-    with the force network's settings (resumed from ``work/tension_head.*`` when there)."""
+    with the force network's settings (resumed from ``work/tension_head.*`` when there; also
+    written to the package with ``ship``)."""
     path = work / "tension_head"
     if path.with_suffix(".pt").is_file():
         return ForceNetwork.load(path)
@@ -116,7 +120,8 @@ def train_head(work: Path, refs: dict[str, xr.Dataset], model: CaseModel) -> For
     settings = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS, "inputs": fmh.INPUTS}
     head = fmh.fit_tension_head(hs, model.components()["mooring"], settings)
     head.save(path)
-    head.save(fmh.HEAD)
+    if ship:
+        head.save(fmh.HEAD)
     print(f"tension head trained in {time.perf_counter() - start:.0f} s "
           f"({head.n_epochs_} epochs, validation {head.best_val_loss_:.3g})", flush=True)
     return head
@@ -212,8 +217,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.runs_only:
         return simulate_all(work, dur, long_dur)
     model = fmh.case_model(fmh.TRAIN["train1"], "table")
-    pipes = {k: train(work, refs, model, k) for k in fmh.PARTITIONS}
-    head = train_head(work, refs, model)
+    pipes = {k: train(work, refs, model, k, ship=not args.quick) for k in fmh.PARTITIONS}
+    head = train_head(work, refs, model, ship=not args.quick)
     out: dict[str, Any] = {"held_out": {},
                            "prediction": {k: fmh.prediction(p) for k, p in pipes.items()}}
     series = {}
