@@ -132,3 +132,30 @@ def test_report_section_from_the_file(tmp_path):
     text = fmh.report_section(tmp_path)
     assert all(f"| {fmh.LABELS[k]} |" in text for k in fmh.MODELS)
     assert (tmp_path / "moordyn_hybrid_spectra.png").stat().st_size > 10_000
+
+
+def test_head_tensions_reads_the_wave_beyond_the_run():
+    """:func:`fmh.head_tensions` feeds the head η of the run's case ``lead`` steps ahead,
+    also past the run's last sample (a hybrid run ends ``lead`` steps before its case):
+    a head trained to output η(t + lead) (fairlead) and −2 η(t + lead) (anchor) of one line
+    gives them back along a shorter run, to its last sample."""
+    from hybridwsi.history import make_history
+    from hybridwsi.surrogate.network import ForceNetwork
+
+    dt, n, lead = fmh.DT, 1500, 5
+    t = np.arange(n) * dt
+    eta = np.sin(0.9 * t) + 0.5 * np.sin(1.7 * t + 1.0)
+    zero = np.zeros((n, len(fmh.DOFS)))
+    case = make_history(t, zero, zero, zero, dof=list(fmh.DOFS), check=False,
+                        extra_vars={"eta": (("time", "probe"), eta[:, None], {"units": "m"})})
+    ahead = np.r_[eta[lead:], np.zeros(lead)]
+    head = ForceNetwork(hidden=(8,), inputs=("eta",), lead=lead, max_epochs=200, lr=1e-2,
+                        patience=40, seed=0).fit(case, [np.stack([ahead, -2 * ahead], 1)],
+                                                 n_out=2)
+    run = case.isel(time=slice(0, n - lead))  # the hybrid's grid: lead steps short
+    got = fmh.head_tensions(head, run, case)
+    assert got.shape == (n - lead, 1, 2)
+    want = eta[lead:]
+    assert np.sqrt(np.mean((got[:, 0, 0] - want) ** 2)) < 0.05 * np.std(want)
+    assert np.sqrt(np.mean((got[:, 0, 1] + 2 * want) ** 2)) < 0.1 * np.std(want)
+    assert abs(got[-1, 0, 0] - eta[-1]) < 0.1  # the last sample reads the case's last η
