@@ -1,7 +1,7 @@
 """OC3-Hywind at design fidelity: the hybrid against the MoorDyn-coupled reference (issue 29
 items 5-6; docs/OC3_HYWIND.md "The hybrid on the MoorDyn-coupled reference").
 
-Reference ("high fidelity"): Cummins (Surge, Heave, Pitch) + MoorDyn + slow drift (Newman) +
+Reference ("high fidelity"): 6-DOF Cummins + MoorDyn (a coupled 6-DOF body) + slow drift (Newman) +
 Morison drag with the wave kinematics + the operating NREL 5-MW rotor (quasi-steady) in
 turbulent wind (Kaimal, TI 0.1) + the additional linear damping, JONSWAP seas. The network
 learns the residual of the partition the diagnostic recommends (docs/OC3_HYWIND.md "The
@@ -15,15 +15,22 @@ network's residual is taken of, and each run's rollout carries the rotor of its 
 Resumable: every simulated history goes to ``WORK/full/<model>_<sea>.nc`` (atomic) as soon as
 it is computed and a rerun only computes what is missing; the network to
 ``WORK/full/network.pt/.json`` (and, when trained, ``hybridwsi/data/oc3_moordyn_hybrid_network``).
+The tension head (``WORK/full/tension_head.*`` and ``hybridwsi/data/oc3_moordyn_hybrid_
+tension_head``) predicts MoorDyn's line tensions beyond the quasi-static ones from the same
+features; it is an output of both hybrids, not coupled to the ODE. The 3-hour check runs each
+hybrid against a 3-hour MoorDyn-coupled reference of its sea and wind (``WORK/full/
+moordyn_long.nc``; a cut-off run restarts that run: the solver has no mid-run checkpoint).
 The results go to ``src/hybridwsi/data/oc3_moordyn_hybrid.json`` (metrics per held-out sea,
-the stability prediction, the 3-hour run, settings, provenance) and ``.nc`` (surge, heave,
-pitch and the most loaded line's fairlead tension of every model after the ramp, float32,
-compressed; the report's table and spectra are computed from it).
+the stability prediction, the 3-hour runs, settings, provenance) and ``.nc`` (the six DOFs,
+the most loaded line's fairlead tension and its quasi-static tension of every model after
+the ramp, scaled int32 at 0.1 mm / 1 µrad / 1 N, compressed; the metrics are computed on
+these series and the report's table and spectra from them).
 
     OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src nice -n 5 \\
         python scripts/oc3_moordyn_hybrid.py --work /tmp/oc3_moordyn_hybrid
 
 ``--quick``: 300 s seas, a 600 s long run, nothing shipped (a look at the pipeline).
+``--runs-only``: only the simulated runs (the expensive, resumable part).
 """
 
 from __future__ import annotations
@@ -65,14 +72,25 @@ def cached(work: Path, kind: str, name: str, sea: tuple, duration: float) -> xr.
     return read_netcdf(path)
 
 
-def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: str
-          ) -> HybridPipeline:
+def simulate_all(work: Path, dur: float, long_dur: float) -> int:
+    """Every simulated run of the study (``--runs-only``: the expensive part, resumable)."""
+    for name, sea in fmh.HELD.items():
+        for kind in ("moordyn", "table", "linear"):
+            cached(work, kind, name, sea, dur)
+    for kind in ("moordyn", "table"):
+        cached(work, kind, "long", fmh.LONG["long"], long_dur)
+    return 0
+
+
+def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: str,
+          ship: bool = True) -> HybridPipeline:
     """The network of ``partition`` through the pipeline (resumed from
-    ``work/network_<partition>.*`` when there); each history prepared with its own wind."""
+    ``work/network_<partition>.*`` when there; also written to the package with ``ship``);
+    each history prepared with its own wind."""
     hs = [fmh.prepared(h, fmh.case_model(fmh.TRAIN[n], "table")) for n, h in refs.items()]
     known = fmh.known_part(hs[0], model, partition, rotor=False)
     net_cfg = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS}
-    pipe = HybridPipeline(partition, inputs=("z", "zdot", "eta"), known=known, mode=fmh.MODE,
+    pipe = HybridPipeline(partition, inputs=fmh.INPUTS, known=known, mode=fmh.MODE,
                           network=net_cfg, force=f"F_{partition}", allow_unstable=True)
     path = work / f"network_{partition}"
     if path.with_suffix(".pt").is_file():
@@ -83,9 +101,72 @@ def train(work: Path, refs: dict[str, xr.Dataset], model: CaseModel, partition: 
     start = time.perf_counter()
     pipe.fit(hs, model.coeffs)
     pipe.network_.save(path)
-    pipe.network_.save(fmh.NETWORKS[partition])
+    if ship:
+        pipe.network_.save(fmh.NETWORKS[partition])
     print(f"{partition} trained in {time.perf_counter() - start:.0f} s", flush=True)
     return pipe
+
+
+def train_head(work: Path, refs: dict[str, xr.Dataset], model: CaseModel,
+               ship: bool = True) -> ForceNetwork:
+    """The tension head (:func:`fmh.fit_tension_head`) on the prepared training references,
+    with the force network's settings (resumed from ``work/tension_head.*`` when there; also
+    written to the package with ``ship``)."""
+    path = work / "tension_head"
+    if path.with_suffix(".pt").is_file():
+        return ForceNetwork.load(path)
+    start = time.perf_counter()
+    hs = [fmh.prepared(h, fmh.case_model(fmh.TRAIN[n], "table")) for n, h in refs.items()]
+    settings = {**model.case["hybrid"]["network"], **NETWORK_EPOCHS, "inputs": fmh.INPUTS}
+    head = fmh.fit_tension_head(hs, model.components()["mooring"], settings)
+    head.save(path)
+    if ship:
+        head.save(fmh.HEAD)
+    print(f"tension head trained in {time.perf_counter() - start:.0f} s "
+          f"({head.n_epochs_} epochs, validation {head.best_val_loss_:.3g})", flush=True)
+    return head
+
+
+def held_out(work: Path, name: str, sea: tuple, dur: float, pipes: dict[str, HybridPipeline],
+             head: ForceNetwork) -> tuple[xr.Dataset, dict[str, Any]]:
+    """One held-out sea: the runs, the hybrids (with the tension head), the series and the
+    metrics (with the head on the reference's own motion: its error without the hybrid's)."""
+    runs = {k: cached(work, k, name, sea, dur) for k in ("moordyn", "table", "linear")}
+    model = fmh.case_model(sea, "table")
+    mooring = model.components()["mooring"]
+    runs["linear"] = fmh.with_tensions(runs["linear"], mooring)
+    runs["moordyn"] = fmh.with_quasi_static(runs["moordyn"], mooring)
+    walls = {k: float(runs[k].attrs.get("wall_s", np.nan)) for k in runs}
+    for k, pipe in pipes.items():
+        runs[k], walls[k] = fmh.run_hybrid(pipe.network_, runs["moordyn"], model, k,
+                                           corrections=pipe.corrections_, head=head)
+    one = fmh.stored(fmh.series(runs, ramp=fmh.RAMP))
+    ref = fmh.with_tensions(runs["moordyn"], mooring, head, fmh.prepared(runs["moordyn"], model))
+    line = one.attrs["most_loaded_line"]
+    t = one["time"].values
+    on_ref = ref["T_fairlead"].sel(line=line, time=t, method="nearest").values
+    want = runs["moordyn"]["T_fairlead"].sel(line=line, time=t, method="nearest").values
+    return one, {**fmh.metrics(one), "wall_s": walls,
+                 "head_on_reference": fmh.errors(np.asarray(on_ref, float),
+                                                 np.asarray(want, float))}
+
+
+def long_runs(work: Path, long_dur: float, pipes: dict[str, HybridPipeline],
+              head: ForceNetwork) -> dict[str, Any]:
+    """The 3-hour check: each hybrid against the 3-hour MoorDyn-coupled reference of the same
+    sea and wind (the quasi-static run beside it), started from the reference's first
+    window."""
+    sea = fmh.LONG["long"]
+    ref, table = (cached(work, k, "long", sea, long_dur) for k in ("moordyn", "table"))
+    model = fmh.case_model(sea, "table")
+    ref = fmh.with_quasi_static(ref, model.components()["mooring"])
+    out = {}
+    for k, pipe in pipes.items():
+        hyb, wall = fmh.run_hybrid(pipe.network_, ref, model, k,
+                                   corrections=pipe.corrections_, head=head)
+        out[k] = fmh.long_run(hyb, ref, table, ramp=fmh.RAMP, wall=wall)
+    out["reference_wall_s"] = float(ref.attrs.get("wall_s", np.nan))
+    return out
 
 
 def settings(pipes: dict[str, HybridPipeline], dur: float, long_dur: float) -> dict[str, Any]:
@@ -111,8 +192,11 @@ def ship(dest: Path, out: dict[str, Any], series: dict[str, xr.Dataset]) -> None
     ds["most_loaded_line"] = ("sea", [s.attrs["most_loaded_line"] for s in series.values()])
     ds.attrs.update({"source": "scripts/oc3_moordyn_hybrid.py", "command": out["command"],
                      "provenance": json.dumps(out["provenance"])})
-    for v in ("surge", "heave", "pitch", "tension"):
-        ds[v].encoding = {"zlib": True, "complevel": 6, "dtype": "float32"}
+    for v, unit in fmh.UNITS.items():  # scaled int32 at the series' resolution: < 2 MB
+        ds[v].attrs["units"] = unit
+        ds[v].encoding = {"zlib": True, "complevel": 9, "shuffle": True, "dtype": "int32",
+                          "scale_factor": fmh.RESOLUTION[unit],
+                          "_FillValue": np.iinfo(np.int32).min}
     to_netcdf(ds, dest.with_suffix(".nc"))
 
 
@@ -122,37 +206,34 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--quick", action="store_true", help="300 s seas, nothing shipped")
     p.add_argument("--duration", type=float, default=1800.0, help="s per sea (default 1800)")
     p.add_argument("--long-duration", type=float, default=10800.0, help="s (default 3 h)")
+    p.add_argument("--runs-only", action="store_true",
+                   help="only the simulated runs (references, quasi-static, linear), no network")
     args = p.parse_args(argv)
     dur, long_dur = (300.0, 600.0) if args.quick else (args.duration, args.long_duration)
     work = args.work / ("quick" if args.quick else "full")
     work.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     refs = {n: cached(work, "moordyn", n, s, dur) for n, s in fmh.TRAIN.items()}
+    if args.runs_only:
+        return simulate_all(work, dur, long_dur)
     model = fmh.case_model(fmh.TRAIN["train1"], "table")
-    pipes = {k: train(work, refs, model, k) for k in fmh.PARTITIONS}
-    out: dict[str, Any] = {"held_out": {}, "long": {},
+    pipes = {k: train(work, refs, model, k, ship=not args.quick) for k in fmh.PARTITIONS}
+    head = train_head(work, refs, model, ship=not args.quick)
+    out: dict[str, Any] = {"held_out": {},
                            "prediction": {k: fmh.prediction(p) for k, p in pipes.items()}}
     series = {}
     for name, sea in fmh.HELD.items():
-        runs = {k: cached(work, k, name, sea, dur) for k in ("moordyn", "table", "linear")}
-        model = fmh.case_model(sea, "table")
-        runs["linear"] = fmh.with_tensions(runs["linear"], model.components()["mooring"])
-        walls = {k: float(runs[k].attrs.get("wall_s", np.nan)) for k in runs}
-        for k, pipe in pipes.items():
-            runs[k], walls[k] = fmh.run_hybrid(pipe.network_, runs["moordyn"], model, k,
-                                               corrections=pipe.corrections_)
-        series[name] = fmh.series(runs, ramp=fmh.RAMP)
-        out["held_out"][name] = {**fmh.metrics(series[name]), "wall_s": walls}
-        print(name, json.dumps(walls), json.dumps({k: out["held_out"][name]["errors"][k]
-                                                   for k in fmh.PARTITIONS}), flush=True)
-    long_ref = cached(work, "table", "long", fmh.LONG["long"], long_dur)
-    model = fmh.case_model(fmh.LONG["long"], "table")
-    for k, pipe in pipes.items():
-        hyb, wall = fmh.run_hybrid(pipe.network_, long_ref, model, k,
-                                   corrections=pipe.corrections_)
-        out["long"][k] = fmh.long_run(hyb, long_ref, ramp=fmh.RAMP, wall=wall)
+        series[name], out["held_out"][name] = held_out(work, name, sea, dur, pipes, head)
+        print(name, json.dumps(out["held_out"][name]["wall_s"]),
+              json.dumps({k: out["held_out"][name]["errors"][k] for k in fmh.PARTITIONS}),
+              flush=True)
+    out["long"] = long_runs(work, long_dur, pipes, head)
     print(json.dumps(out["long"]), flush=True)
     out.update(settings(pipes, dur, long_dur))
+    meta = json.loads((work / "tension_head.json").read_text())  # as trained (or resumed)
+    out["tension_head"] = {"target": "T_MoorDyn - T_quasi-static(z) per line, fairleads then "
+                                     "anchors", "network_settings": head.get_params(),
+                           "n_epochs": meta["n_epochs"], "best_val_loss": meta["best_val_loss"]}
     out["provenance"] = provenance("moordyn", "moorpy", "torch", "numpy")
     out["command"] = ("OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONPATH=src nice -n 5 python "
                       "scripts/oc3_moordyn_hybrid.py --work WORK" + " --quick" * args.quick)

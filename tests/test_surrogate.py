@@ -186,3 +186,24 @@ def test_training_set_of_mixed_step_or_mass_or_nan_force_is_refused():
     nan["F_lin"][40, 0] = np.nan  # e.g. a file read without validation
     with pytest.raises(InputError, match="history 1 .*NaN.*row 40"):
         ForceNetwork(max_epochs=1).fit([a, nan], "F_lin")
+
+
+def test_output_head_learns_other_columns_than_the_dofs(tmp_path):
+    """``n_out``: a head of two outputs on one DOF's features (the OC3 tension head's use):
+    a linear map of the inputs is learned (R² > 0.99 on a held-out history), survives
+    save/load, and a target of another width is still refused."""
+    def outputs(h):
+        z, v = h["z"].values[:, 0], h["zdot"].values[:, 0]
+        return np.stack([2.0 * z + 0.5 * v, -z + 3.0 * v], axis=1)
+
+    train, held = _linear_history(0, 0, 0, n=800), _linear_history(0, 0, 0, n=400, seed=7)
+    net = ForceNetwork(hidden=(16,), inputs=("z", "zdot"), max_epochs=300, lr=1e-2,
+                       patience=60, seed=1).fit(train, [outputs(train)], n_out=2)
+    want, got = outputs(held), net.predict(held)
+    assert got.shape == want.shape
+    assert 1.0 - np.sum((got - want) ** 2) / np.sum((want - want.mean(0)) ** 2) > 0.99
+    net.save(tmp_path / "head")
+    np.testing.assert_allclose(ForceNetwork.load(tmp_path / "head").predict(held), got,
+                               rtol=0, atol=1e-12)
+    with pytest.raises(InputError, match="n_out"):
+        ForceNetwork(max_epochs=1).fit(train, [outputs(train)], n_out=3)

@@ -94,8 +94,9 @@ def target_force(
 
 
 def _raw_target(hist: xr.Dataset, target: Target, known: Sequence[KnownComponent], force: str,
-                index: int) -> np.ndarray:
-    """:func:`target_force` without the finiteness check, shape (n_time, n_dof) [N]."""
+                index: int, n_out: int | None = None) -> np.ndarray:
+    """:func:`target_force` without the finiteness check, shape (n_time, n_dof) [N] (or
+    (n_time, ``n_out``): an output head's target, not a force on the DOFs)."""
     if isinstance(target, str):
         if target == "F_bb" and "F_bb" not in hist:
             return black_box_force(hist, force, list(known))
@@ -108,9 +109,10 @@ def _raw_target(hist: xr.Dataset, target: Target, known: Sequence[KnownComponent
         arr = target[index] if isinstance(target, (list, tuple)) else target
         y = np.asarray(arr, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
-    if y.shape != (hist.sizes["time"], hist.sizes["dof"]):
-        raise InputError(f"target has shape {y.shape}; expected (n_time, n_dof) = "
-                         f"({hist.sizes['time']}, {hist.sizes['dof']})")
+    width, what = (hist.sizes["dof"], "n_dof") if n_out is None else (n_out, "n_out")
+    if y.shape != (hist.sizes["time"], width):
+        raise InputError(f"target has shape {y.shape}; expected (n_time, {what}) = "
+                         f"({hist.sizes['time']}, {width})")
     return y
 
 
@@ -210,9 +212,10 @@ class ForceNetwork:
             raise InputError("max_epochs and batch_size must be >= 1 and lr > 0")
 
     # -- data ---------------------------------------------------------------------------
-    def _dataset(self, hs: list[xr.Dataset], target: Target, known, force: str):
+    def _dataset(self, hs: list[xr.Dataset], target: Target, known, force: str,
+                 n_out: int | None = None):
         xs_tr, ys_tr, xs_va, ys_va = [], [], [], []
-        targets = [_raw_target(h, target, known, force, i) for i, h in enumerate(hs)]
+        targets = [_raw_target(h, target, known, force, i, n_out) for i, h in enumerate(hs)]
         _check_training_set(hs, targets)
         for h, y_all in zip(hs, targets):
             x = build_features(h, self.spec_)
@@ -233,6 +236,7 @@ class ForceNetwork:
         known: Sequence[KnownComponent] = (),
         force: str = "F_tot",
         progress: bool = False,
+        n_out: int | None = None,
     ) -> ForceNetwork:
         """Train on one or several TimeHistories.
 
@@ -249,6 +253,10 @@ class ForceNetwork:
             Total force variable [N] the black-box force is taken from.
         progress : bool
             Show a tqdm bar over epochs.
+        n_out : int, optional
+            Columns of an array (or callable) target that is not a force on the DOFs: an
+            output head, e.g. line tensions [N] from the same features; it is never coupled
+            to the ODE (:meth:`predict` only). Default: the DOF count.
 
         Returns
         -------
@@ -257,7 +265,7 @@ class ForceNetwork:
         self._check_params()
         hs = _as_list(histories)
         self.spec_ = spec_for(hs[0], self.inputs, self.window, self.stride, self.lead)
-        x_tr, y_tr, x_va, y_va = self._dataset(hs, target, known, force)
+        x_tr, y_tr, x_va, y_va = self._dataset(hs, target, known, force, n_out)
         if len(x_tr) < 2:
             raise InputError(f"only {len(x_tr)} training samples after windowing; need more data")
         self.x_mean_, self.x_std_ = x_tr.mean(0), _safe_std(x_tr)
