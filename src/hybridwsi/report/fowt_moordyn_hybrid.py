@@ -69,7 +69,7 @@ MODELS = ("linear", "table", "moordyn", "hybrid", "hybrid_lin")
 LABELS = {"linear": "linear", "table": "quasi-static (MoorPy table)",
           "moordyn": "MoorDyn-coupled reference",
           "hybrid": "hybrid (quasi-static mooring + rotor known)",
-          "hybrid_lin": "hybrid (linear known part, compiled)"}
+          "hybrid_lin": "hybrid (linear known part)"}
 #: units of the series
 UNITS = {"surge": "m", "sway": "m", "heave": "m", "roll": "rad", "pitch": "rad", "yaw": "rad",
          "tension": "N", "tension_qs": "N"}
@@ -105,9 +105,9 @@ MODE = "corrected"
 INPUTS = ("z", "zdot", "eta")
 #: the two partitions (model name -> what the network learns; docs/OC3_HYWIND.md):
 #: ``hybrid`` the diagnostic's recommendation, the quasi-static mooring and the rotor in the
-#: ODE (NumPy stepper: both are nonlinear components); ``hybrid_lin`` everything known linear
-#: (the mooring linearised about rest, the rotor's wind force as a time series and its
-#: aerodynamic damping at the mean wind), so the rollout runs in the compiled loop
+#: ODE (nonlinear components with Numba kernels, evaluated inside the compiled loop);
+#: ``hybrid_lin`` everything known linear (the mooring linearised about rest, the rotor's wind
+#: force as a time series and its aerodynamic damping at the mean wind)
 PARTITIONS = {
     "hybrid": "MoorDyn - quasi-static mooring + slow drift + drag",
     "hybrid_lin": "MoorDyn + K z (its linearisation about rest removed) + slow drift + drag + "
