@@ -20,7 +20,17 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from hybridwsi import __version__
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import one_line, read_dofs
+from hybridwsi.diagnostic.regression import regress
+from hybridwsi.diagnostic.stability import CoupledStep, assess
 from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path, write_json
+from hybridwsi.forces.linear import FROM_DATA, canonical_name, known_from, mass_from, parse_known
+from hybridwsi.history import (estimate_derivatives, force_names, make_history, select_dofs,
+                               split_header)
+from hybridwsi.hydro.formats import read_coefficients
 
 HELP = "regress a force history on the motion and judge the stability of the force partition"
 DESCRIPTION = (
@@ -46,8 +56,6 @@ EXAMPLE = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     parser.add_argument("file", nargs="?", metavar="FILE", help="force/motion history file")
     parser.add_argument("--example", action="store_true",
                         help="run on a built-in synthetic multi-frequency forced oscillator")
@@ -95,8 +103,6 @@ def example_history() -> xr.Dataset:
     regression of ``F_tot`` returns α = m + A, β = 0, γ = C (docs/THEORY.md §1, case 3); with no known
     component α = m, β = γ = 0 (case 1). Three frequencies make the split identifiable.
     """
-    from hybridwsi.history import make_history
-
     p = EXAMPLE
     m, a, b, c = (p["mass_kg"], p["added_mass_inf_kg"], p["damping_Ns_per_m"],
                   p["stiffness_N_per_m"])
@@ -119,9 +125,6 @@ def example_history() -> xr.Dataset:
 
 def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[str, Any]]:
     """The history to diagnose and a description of where it came from."""
-    from hybridwsi.commands._options import read_dofs
-    from hybridwsi.history import select_dofs
-
     if args.example:
         if args.file:
             raise InputError("give either FILE or --example, not both")
@@ -143,8 +146,6 @@ def _load(args: argparse.Namespace, notes: list[str]) -> tuple[xr.Dataset, dict[
 
 def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr.Dataset:
     """Check that z and the force exist; estimate missing derivatives (noted)."""
-    from hybridwsi.history import estimate_derivatives, force_names
-
     if "z" not in hist:
         missing = hist.attrs.get("missing", "z")
         raise InputError(f"the history has no displacement z (missing: {missing}); "
@@ -156,8 +157,6 @@ def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr
             notes.append(f"{k} was not in the file: estimated from z by "
                          f"{hist[k].attrs['estimated']}")
     if args.force_column not in hist:
-        from hybridwsi.history import split_header
-
         base = split_header(args.force_column)[0]
         if base in hist and hist[base].attrs.get("role") == "force":
             args.force_column = base
@@ -170,8 +169,6 @@ def _prepare(hist: xr.Dataset, args: argparse.Namespace, notes: list[str]) -> xr
 
 def _coefficients(args: argparse.Namespace) -> xr.Dataset | None:
     """The ``--coeffs`` Dataset, or None."""
-    from hybridwsi.hydro.formats import read_coefficients
-
     return read_coefficients(args.coeffs, assume_seawater=True) if args.coeffs else None
 
 
@@ -179,8 +176,6 @@ def _known(specs: list[str], hist: xr.Dataset | None, coeffs: xr.Dataset | None)
     """Components of ``--known``: ``NAME=VALUE`` as given, a bare ``NAME`` from the history's
     matrices or the coefficients (:func:`hybridwsi.forces.linear.known_from`). Without a
     history only the names are checked (fail fast) and the bare ones are left out."""
-    from hybridwsi.forces.linear import FROM_DATA, canonical_name, known_from, parse_known
-
     out = []
     for spec in specs:
         if "=" in spec:
@@ -199,13 +194,10 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
                notes: list[str], coeffs: xr.Dataset | None = None
                ) -> list[dict[str, Any]] | None:
     """Stability reports as dicts, or None without a mass."""
-    from hybridwsi.forces.linear import mass_from
-
     mass = args.mass if args.mass is not None else mass_from(hist, coeffs)
     if mass is None:
         notes.append("no mass given (--mass): stability assessment skipped")
         return None
-    from hybridwsi.diagnostic.stability import CoupledStep, assess
 
     m = np.asarray(mass, dtype=float)
     step = CoupledStep.from_components(float(m.ravel()[0]) if m.size == 1 else m, known, result,
@@ -215,10 +207,6 @@ def _stability(result: Any, hist: xr.Dataset, known: list, args: argparse.Namesp
 
 def diagnose(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """Run the whole diagnosis: ``(JSON-ready dict, RegressionResult)``."""
-    from hybridwsi import __version__
-    from hybridwsi.commands._options import one_line
-    from hybridwsi.diagnostic.regression import regress
-
     notes: list[str] = []
     _known(args.known, None, None)  # fail fast on a bad --known
     coeffs = _coefficients(args)
@@ -259,8 +247,6 @@ def _print(out: dict[str, Any], result: Any, notes_count: int) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.files import check_output_path, write_json
-
     if args.json:
         check_output_path(args.json, [args.file, args.coeffs])
     out, result = diagnose(args)

@@ -3,6 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
+
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import case_overrides, check_steps, require, scheduler_address
+from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path
+from hybridwsi.hydro import coefficients as cf
+from hybridwsi.hydro.formats import read_coefficients
+from hybridwsi.sweep import MANIFEST, SPHERE_DOFS, SYNCHRONOUS, SweepConfig, case_grid, run_sweep
 
 HELP = "run a grid of irregular-sea Cummins cases on Dask into one Zarr store (resumable)"
 DESCRIPTION = (
@@ -23,15 +33,10 @@ SPHERE_DEFAULTS = {"duration": 60.0, "dt": 0.01, "ramp": 2.0}
 
 def _scheduler(text: str) -> str:
     """argparse type: a Dask scheduler address, or ``synchronous`` (in this process)."""
-    from hybridwsi.commands._options import scheduler_address
-    from hybridwsi.sweep import SYNCHRONOUS
-
     return text if text == SYNCHRONOUS else scheduler_address(text)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     o.add_case(p, "its body's coefficients ([bem] table, shipped when the inputs match), "
                   "DOFs, force components and [sweep] defaults; default: the paper sphere in "
                   "heave")
@@ -82,9 +87,6 @@ NEEDED = ("added_mass_inf", "hydrostatic_stiffness", "radiation_damping", "excit
 
 def check_coefficients(coeffs, *, mass_given: bool) -> None:
     """Refuse coefficients that lack what every case needs (before any case starts)."""
-    from hybridwsi.errors import InputError
-    from hybridwsi.hydro import coefficients as cf
-
     needed = NEEDED if mass_given else (*NEEDED, "mass")
     missing = [n for n in needed if not cf.has(coeffs, n)]
     if missing:
@@ -97,9 +99,6 @@ def check_coefficients(coeffs, *, mass_given: bool) -> None:
 def config_from(args: argparse.Namespace):
     """The :class:`~hybridwsi.sweep.SweepConfig` of the options: a case's ``[sweep]`` defaults
     (``--case``) or the sphere's, overridden by the options given."""
-    from hybridwsi.commands._options import case_overrides
-    from hybridwsi.sweep import SweepConfig
-
     given = {"duration": args.duration, "dt": args.dt, "ramp": args.ramp, "dofs": args.dofs,
              "gamma": args.jonswap_gamma, "wave_components": args.wave_components,
              "wave_kinematics": args.wave_kinematics, "coeffs": args.coeffs, "mass": args.mass,
@@ -138,13 +137,7 @@ def print_statistics(manifest: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
 
-    from hybridwsi.commands._options import check_steps, require
-    from hybridwsi.errors import InputError
-    from hybridwsi.files import check_output_path
-    from hybridwsi.hydro.formats import read_coefficients
-    from hybridwsi.sweep import MANIFEST, SPHERE_DOFS, SYNCHRONOUS, case_grid, run_sweep
 
     if args.scheduler == SYNCHRONOUS:  # no Dask workers, but the store is Zarr
         require("zarr")
@@ -163,7 +156,6 @@ def run(args: argparse.Namespace) -> int:
                       resume=args.resume, progress=not args.quiet)
     if not args.quiet:
         print(f"{len(cases)} cases -> {store}")
-        from pathlib import Path
 
         print_statistics(json.loads((Path(args.out) / MANIFEST).read_text()))
     return 0
