@@ -7,7 +7,16 @@ import json
 from pathlib import Path
 from typing import Any
 
+from hybridwsi import __version__
+from hybridwsi.casemodel import CaseModel
+from hybridwsi.commands import _options as o
+from hybridwsi.commands._options import read_dofs, require
 from hybridwsi.errors import InputError
+from hybridwsi.files import check_output_path, write_json
+from hybridwsi.history import select_dofs, time_step
+from hybridwsi.hydro.formats import read_coefficients
+# a --case sweep's coefficients, else the paper sphere's
+from hybridwsi.sweep import STORE, case_history, open_sweep, sweep_coefficients
 
 HELP = ("train the residual-force network of a partition, check its stability, roll out; "
         "with --case: write a certified model folder for simulate --network")
@@ -36,8 +45,6 @@ NETWORK_OPTIONS = {"feature_window": "window", "feature_stride": "stride",
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hybridwsi.commands import _options as o
-
     p.add_argument("data", nargs="+", metavar="DATA",
                    help="sweep folder / sweep.zarr, or history files")
     o.add_out(p, "output folder (without --case: network.pt, network.json, report.json; with "
@@ -111,8 +118,6 @@ MAX_WIDTH = 65536
 
 def _open_sweep(path: Path):
     """:func:`hybridwsi.sweep.open_sweep`, with a corrupt store as one InputError."""
-    from hybridwsi.sweep import open_sweep
-
     try:
         return open_sweep(path)
     except InputError:
@@ -125,10 +130,6 @@ def _open_sweep(path: Path):
 def _load(data: list[str], dofs: tuple[str, ...] | None, eta: str | None = None):
     """``(histories, names, manifest)`` of DATA: every case of a sweep store
     (``PATH[case i]``), every history file."""
-    from hybridwsi.commands._options import read_dofs
-    from hybridwsi.history import select_dofs
-    from hybridwsi.sweep import STORE, case_history
-
     hists, names, manifest = [], [], None
     for item in data:
         path = Path(item)
@@ -179,8 +180,6 @@ def _pipeline(args: argparse.Namespace, settings: dict[str, Any], default_partit
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridwsi.commands._options import require
-    from hybridwsi.files import check_output_path
     from hybridwsi.surrogate.rollout import UnstablePartitionError
 
     require("torch")
@@ -201,8 +200,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_certified(args: argparse.Namespace) -> int:
     """``--case``: train and certify a model folder (:mod:`hybridwsi.surrogate.certified`)."""
-    from hybridwsi.casemodel import CaseModel
-    from hybridwsi.history import time_step
     from hybridwsi.surrogate.certified import case_linear, train_model
 
     hists, names, _ = _load(args.data, args.dofs, args.eta)
@@ -229,23 +226,17 @@ def _run_certified(args: argparse.Namespace) -> int:
 
 
 def _coefficients(args: argparse.Namespace, manifest: dict | None):
-    from hybridwsi.hydro.formats import read_coefficients
 
     if args.coeffs:
         return read_coefficients(args.coeffs, assume_seawater=True)
     if manifest and manifest["config"].get("coeffs"):
         return read_coefficients(manifest["config"]["coeffs"], assume_seawater=True)
-    from hybridwsi.sweep import sweep_coefficients  # a --case sweep's, else the paper sphere's
 
     return sweep_coefficients(manifest or {})
 
 
 def _run_histories(args: argparse.Namespace) -> int:
     """Without ``--case``: train on the first cases, roll out the held-out ones, report."""
-    from hybridwsi import __version__
-    from hybridwsi.files import write_json
-    from hybridwsi.history import time_step
-
     if args.quick:
         raise InputError("--quick needs --case")
     hists, _, manifest = _load(args.data, args.dofs, args.eta)

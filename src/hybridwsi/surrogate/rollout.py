@@ -331,12 +331,18 @@ def rollout(net: ForceNetwork, cases: xr.Dataset | Sequence[xr.Dataset], *,
     sol = solve_coupled(
         stepper, pre, start.z, start.v, dt, progress=progress, a0=start.a, x0=start.x,
         window=start.buf, eta=eta, t=np.asarray(hs[0]["time"].values, float), start=k0,
-        lead=lead, n_steps=n_steps, ref_amp=np.maximum(
-            np.max(np.abs(kin["z"]), axis=(1, 2)) if amplitude is None
-            else np.full(len(hs), float(amplitude)), 1e-12),
+        lead=lead, n_steps=n_steps, ref_amp=_reference_amplitude(kin["z"], amplitude),
         layers=folded_layers(net) if use_compiled else None)
     saw = _sawtooth(sol.a, kin["zddot"][:, k0:k0 + n_steps + 1])
     return RolloutResult(_histories(net, hs, sol, mass, mode, known), prediction, sol, saw)
+
+
+def _reference_amplitude(z: np.ndarray, amplitude: float | None) -> np.ndarray:
+    """Per case, the max |z| the divergence watch compares with [m, rad]: each reference's
+    own (``z`` of shape (case, time, dof)) or the given ``amplitude``; never below 1e-12."""
+    amp = (np.max(np.abs(z), axis=(1, 2)) if amplitude is None
+           else np.full(len(z), float(amplitude)))
+    return np.maximum(amp, 1e-12)
 
 
 def _n_steps(n_total: int, spec: Any, n_steps: int | None) -> int:
