@@ -147,13 +147,16 @@ def simulate(kind: str, sea: tuple, duration: float) -> xr.Dataset:
                           extra={"linear_mooring": lin[0]}, from_offset=False, z0=z0)
 
 
-def known_part(hist: xr.Dataset, model: CaseModel, partition: str, *, rotor: bool) -> list:
+def known_part(hist: xr.Dataset, model: CaseModel, partition: str, *, rotor: bool,
+               comps: dict | None = None) -> list:
     """The known components of ``partition`` (:data:`PARTITIONS`) on ``hist``: the
     candidates, the additional damping and the mooring (``hybrid``: the quasi-static
     tabulated one; ``hybrid_lin``: linearised about rest, −K z) and, with ``rotor``, the rotor
     of ``model``'s wind (``hybrid``: the operating rotor itself; ``hybrid_lin``: its force in
-    the wind alone, ``F_rotor_wind`` of the history, and its damping at the mean wind)."""
-    comps = model.components()
+    the wind alone, ``F_rotor_wind`` of the history, and its damping at the mean wind).
+    ``comps``: ``model.components()`` when the caller has built them (each build reads the
+    rotor table)."""
+    comps = model.components() if comps is None else comps
     known = [*build_candidates(hist, model.coeffs, CANDIDATES).values(),
              comps["linear_damping"]]
     if partition == "hybrid":
@@ -165,13 +168,14 @@ def known_part(hist: xr.Dataset, model: CaseModel, partition: str, *, rotor: boo
     return known
 
 
-def prepared(hist: xr.Dataset, model: CaseModel) -> xr.Dataset:
+def prepared(hist: xr.Dataset, model: CaseModel, comps: dict | None = None) -> xr.Dataset:
     """The history with the radiation state space its ``radiation_memory`` candidate reads,
     ``F_rotor_wind`` (the rotor's force in the wind with the hub at rest; time only) and, for
     a reference run, the forces the residual of each partition is taken of when its rotor
     model is known: ``F_hybrid = F_tot − F_rotor`` (the recorded rotor force) and
-    ``F_hybrid_lin = F_tot − (F_rotor_wind − B_aero ż)`` — each history its own wind."""
-    rotor = model.components()["rotor"]
+    ``F_hybrid_lin = F_tot − (F_rotor_wind − B_aero ż)`` — each history its own wind
+    (``comps`` as in :func:`known_part`)."""
+    rotor = (model.components() if comps is None else comps)["rotor"]
     t = np.asarray(hist["time"].values, float)
     still = np.zeros((t.size, len(DOFS)))
     f_wind = np.asarray(rotor.ode_force(t, still, still, np.zeros(0)), float)  # hub at rest
@@ -214,13 +218,15 @@ def run_hybrid(network: ForceNetwork, ref: xr.Dataset, model: CaseModel, partiti
     tensions along its motion (:func:`with_tensions`: quasi-static, plus the tension
     ``head``'s line dynamics when given)."""
     start = time.perf_counter()
-    h = prepared(ref, model)
-    run = HybridPipeline.from_network(network, known_part(h, model, partition, rotor=True),
+    comps = model.components()  # once: each build reads the rotor table
+    h = prepared(ref, model, comps)
+    run = HybridPipeline.from_network(network, known_part(h, model, partition, rotor=True,
+                                                          comps=comps),
                                       mass=h["mass"].values, dt=DT, mode=MODE,
                                       corrections=corrections)
     hyb = run.rollout([h]).histories[0]
     wall = time.perf_counter() - start
-    return with_tensions(hyb, model.components()["mooring"], head, h), wall
+    return with_tensions(hyb, comps["mooring"], head, h), wall
 
 
 def linear_offset(model: Any, k_moor: np.ndarray) -> np.ndarray:
