@@ -71,7 +71,8 @@ DEFERRED: dict[str, tuple[str, ...]] = {
     # PyTorch (extra ``ml``): the networks
     "hybridwsi.surrogate.certified": ("commands/hybrid.py", "commands/simulate.py"),
     "hybridwsi.surrogate.demo": ("report/reproduce.py",),
-    "hybridwsi.surrogate.network": ("commands/hybrid.py", "surrogate/kramer.py"),
+    "hybridwsi.surrogate.network": ("commands/hybrid.py", "surrogate/kramer.py",
+                                   "surrogate/multistep.py"),
     "hybridwsi.surrogate.pipeline": ("commands/hybrid.py", "surrogate/kramer.py"),
     "hybridwsi.surrogate.rollout": ("commands/hybrid.py", "surrogate/kramer.py"),
     # Matplotlib: only when drawing (the FOWT reports also train networks: PyTorch)

@@ -32,19 +32,19 @@ if TYPE_CHECKING:  # the set-up's module imports this one
     from hybridwsi.surrogate.kramer import KramerSetup
 
 
-def rk4_step(rhs: Any, z: Any, v: Any, x: Any, h: float) -> tuple[Any, Any, Any]:
-    """One classical Runge–Kutta step of ``(ż, v̇, ẋ) = rhs(z, v, x)`` of length ``h`` [s].
+def rk4_step(rhs: Any, y: Any, h: float) -> Any:
+    """One classical Runge–Kutta step of ``ẏ = rhs(y)`` of length ``h`` [s].
 
     Arithmetic only, so the same step serves NumPy arrays
     (:func:`hybridwsi.surrogate.structured.integrate_decay`) and torch tensors
-    (:func:`torch_decays`, differentiable).
+    (:func:`torch_decays`, differentiable). ``y`` is the whole state, one array, so that a
+    torch step records few operations (the rollout is bound by their count, not their size).
     """
-    d1 = rhs(z, v, x)
-    d2 = rhs(z + 0.5 * h * d1[0], v + 0.5 * h * d1[1], x + 0.5 * h * d1[2])
-    d3 = rhs(z + 0.5 * h * d2[0], v + 0.5 * h * d2[1], x + 0.5 * h * d2[2])
-    d4 = rhs(z + h * d3[0], v + h * d3[1], x + h * d3[2])
-    return tuple(y + h / 6.0 * (a + 2 * b + 2 * c + d)
-                 for y, a, b, c, d in zip((z, v, x), d1, d2, d3, d4))
+    d1 = rhs(y)
+    d2 = rhs(y + (0.5 * h) * d1)
+    d3 = rhs(y + (0.5 * h) * d2)
+    d4 = rhs(y + h * d3)
+    return y + (h / 6.0) * (d1 + 2 * d2 + 2 * d3 + d4)
 
 
 #: multi-step (rollout) training of the network on the training drops' heave: RK4 step [s]
@@ -78,25 +78,58 @@ def torch_decays(net: Any, setup: KramerSetup, h0: np.ndarray, dt: float, n_step
     """
     import torch
 
-    as_t = lambda a: torch.as_tensor(np.asarray(a, dtype=float))  # noqa: E731
-    ss = setup.memory.ss
-    ar, br, cr = as_t(ss.A), as_t(ss.B[:, 0]), as_t(ss.C[0])
-    poly = [float(c) for c in hydrostatic_polynomial(setup)]
+    from hybridwsi.surrogate.network import activation_function
+
+    lin, bias, poly = _linear_part(setup)
+    n = lin.shape[0]
+    lin_t, bias_t = torch.as_tensor(lin.T.copy()), torch.as_tensor(bias)
+    e_v = torch.zeros(1, n, dtype=torch.float64)
+    e_v[0, 1] = 1.0
     m0 = setup.mass + setup.added_mass_inf
+    p3, p2 = float(poly[0]) / m0, float(poly[1]) / m0
+    layers = net.physical_layers(out_scale=1.0 / m0)
+    # the first layer reads (z, ż) from the whole state: zero columns for x, no slicing per step
+    w, b = layers[0]
+    layers[0] = (torch.cat([w, torch.zeros(w.shape[0], n - 2, dtype=w.dtype)], dim=1), b)
+    act = activation_function(net.activation)
 
-    def rhs(z: Any, v: Any, x: Any) -> tuple[Any, Any, Any]:
-        f_hs = ((poly[0] * z + poly[1]) * z + poly[2]) * z + poly[3]
-        f_net = net.forward(torch.stack([z, v], dim=-1))[:, 0]
-        return v, (f_hs - x @ cr + f_net) / m0, x @ ar.T + v[:, None] * br
+    def rhs(y: Any) -> Any:
+        h = y
+        for k, (w, b) in enumerate(layers):
+            h = torch.nn.functional.linear(h, w, b)
+            h = act(h) if k < len(layers) - 1 else h
+        z = y[:, :1]
+        f = torch.addcmul(h, z * z, z * p3 + p2)  # N/m0 + the cubic's z³ and z² terms / m0
+        return torch.addcmul(torch.addmm(bias_t, y, lin_t), f, e_v)
 
-    z = as_t(h0)
-    v = torch.zeros_like(z)
-    x = torch.zeros(z.shape[0], ar.shape[0], dtype=z.dtype)
-    out = [z]
+    y = torch.zeros(len(h0), n, dtype=torch.float64)
+    y[:, 0] = torch.as_tensor(np.asarray(h0, dtype=float))
+    out = [y]
     for h in ([first] if first > 1e-12 else []) + [dt] * n_steps:
-        z, v, x = rk4_step(rhs, z, v, x, h)
-        out.append(z)
-    return torch.stack(out, dim=1)
+        y = rk4_step(rhs, y, h)
+        out.append(y)
+    return torch.stack(out, dim=1)[:, :, 0]
+
+
+def _linear_part(setup: KramerSetup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hybrid's right-hand side on the state ``y = (z, ż, x)`` without the network and
+    the cubic's z³ and z² terms: ``ẏ = L y + c``, and the cubic (highest power first).
+
+    ``(m + A∞) z̈ = F_hs(z) − C_r x + N``, ``ẋ = A_r x + B_r ż``; the linear and constant
+    terms of F_hs(z) enter ``L`` and ``c``.
+    """
+    ss = setup.memory.ss
+    ar, br, cr = (np.asarray(a, dtype=float) for a in (ss.A, ss.B[:, 0], ss.C[0]))
+    poly = hydrostatic_polynomial(setup)
+    m0 = setup.mass + setup.added_mass_inf
+    n = 2 + ar.shape[0]
+    lin = np.zeros((n, n))
+    lin[0, 1] = 1.0
+    lin[1, 0], lin[1, 2:] = poly[2] / m0, -cr / m0
+    lin[2:, 1], lin[2:, 2:] = br, ar
+    bias = np.zeros(n)
+    bias[1] = poly[3] / m0
+    return lin, bias, poly
 
 
 class HeaveLoss:

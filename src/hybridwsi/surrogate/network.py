@@ -54,6 +54,13 @@ def build_mlp(n_in: int, n_out: int, hidden: Sequence[int], activation: str) -> 
     return nn.Sequential(*layers).double()
 
 
+def activation_function(name: str) -> Callable[[Any], Any]:
+    """The torch function of a hidden activation of :func:`build_mlp` (by its name)."""
+    _require_torch()
+    return {"tanh": torch.tanh, "relu": torch.relu, "gelu": nn.functional.gelu,
+            "silu": nn.functional.silu}[name]
+
+
 def _check_training_set(histories: Sequence[xr.Dataset], targets: Sequence[np.ndarray]) -> None:
     """Refuse a training set the network cannot learn one force law from.
 
@@ -337,6 +344,24 @@ class ForceNetwork:
     def forward(self, x: Any) -> Any:
         """Physical-unit network on a torch tensor of features (..., n_features) -> (..., n_dof) [N]."""
         return self.model_((x - self._xm) / self._xs) * self._ys + self._ym
+
+    def physical_layers(self, out_scale: float = 1.0) -> list[tuple[Any, Any]]:
+        """The MLP as ``(weight, bias)`` pairs in physical units, differentiable in its weights.
+
+        The input standardisation is folded into the first layer and the output's (times
+        ``out_scale``) into the last, so that ``linear -> activation -> ... -> linear``
+        (:func:`activation_function` of ``activation``) over these pairs is
+        ``forward(x) * out_scale``. A rollout builds them once per call instead of
+        standardising at every step (:func:`hybridwsi.surrogate.multistep.torch_decays`).
+        """
+        self._check_fitted()
+        pairs = [(m.weight, m.bias) for m in self.model_ if isinstance(m, nn.Linear)]
+        w, b = pairs[0]
+        w = w / self._xs
+        pairs[0] = (w, b - w @ self._xm)
+        w, b = pairs[-1]
+        pairs[-1] = (w * (self._ys * out_scale)[:, None], (b * self._ys + self._ym) * out_scale)
+        return pairs
 
     def predict_features(self, x: np.ndarray) -> np.ndarray:
         """Force [N] for a feature matrix (n, n_features) -> (n, n_dof)."""

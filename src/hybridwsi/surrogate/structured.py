@@ -167,7 +167,8 @@ def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
     m0 = setup.mass + setup.added_mass_inf
     lagrangian = added_mass is not None
 
-    def rhs(z: np.ndarray, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, ...]:
+    def rhs(y: np.ndarray) -> np.ndarray:
+        z, v, x = y[:, 0], y[:, 1], y[:, 2:]
         f = np.interp(z, z_tab, f_tab) - x @ cr - b1 * v - b2 * np.abs(v) * v - k1 * z \
             - k3 * z ** 3
         mass = m0 + a1 * z + a2 * z * z
@@ -175,16 +176,18 @@ def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
             a_z, da_z = added_mass.evaluate(z)
             mass = mass - setup.added_mass_inf + a_z
             f = f - 0.5 * (da_z + a1 + 2.0 * a2 * z) * v * v
-        return v, f / mass, x @ ar.T + np.outer(v, br)
+        return np.column_stack((v, f / mass, x @ ar.T + np.outer(v, br)))
 
     n = int(round(duration / dt))
     t = np.arange(n + 1) * dt
-    z, v, x = h0.copy(), np.zeros(n_run), np.zeros((n_run, ar.shape[0]))
+    y = np.zeros((n_run, 2 + ar.shape[0]))  # (z, ż, x)
+    y[:, 0] = h0
     zs = np.full((n_run, n + 1), np.nan)
-    zs[:, 0] = z
+    zs[:, 0] = h0
     alive = np.ones(n_run, bool)
     for k in range(n):
-        z, v, x = rk4_step(rhs, z, v, x, dt)
+        y = rk4_step(rhs, y, dt)
+        z = y[:, 0]
         alive &= np.isfinite(z) & (np.abs(z) <= r)  # left the water / diverged
         zs[alive, k + 1] = z[alive]
         if not alive.any():
