@@ -23,7 +23,7 @@ import warnings
 #: runpy must execute it fresh as __main__)
 PRELOAD = (
     "numpy", "scipy.signal", "scipy.interpolate", "pandas", "xarray", "netCDF4", "h5py",
-    "matplotlib", "torch", "distributed", "zarr", "capytaine",
+    "matplotlib", "torch", "distributed", "dask.array", "zarr", "capytaine",
     "hybridwsi.commands._options", "hybridwsi.importers", "hybridwsi.hydro.formats",
     "hybridwsi.hydro.bem", "hybridwsi.cummins", "hybridwsi.diagnostic.regression",
     "hybridwsi.diagnostic.stability", "hybridwsi.diagnostic.partition", "hybridwsi.sweep",
