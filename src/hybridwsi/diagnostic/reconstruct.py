@@ -148,7 +148,7 @@ def reconstruct(
     *,
     mass: float | np.ndarray | None = None,
     move_identified: RegressionResult | None = None,
-    method: str = "DOP853",
+    method: str = "RK45",
     rtol: float = 1e-9,
     atol: float = 1e-12,
     max_step: float | None = None,
@@ -170,7 +170,10 @@ def reconstruct(
     move_identified : RegressionResult, optional
         Move its ``α z̈ + β ż + γ z`` into the ODE and prescribe only the residual.
     method, rtol, atol : str, float, float
-        :func:`scipy.integrate.solve_ivp` method and tolerances (atol in m, m/s).
+        :func:`scipy.integrate.solve_ivp` method and tolerances (atol in m, m/s). The step is
+        bounded by the sampling interval (``max_step``), where RK45 already meets the
+        tolerance: it takes the same steps as DOP853 with 6 instead of 15 evaluations each
+        (Fig. 2 of ``reproduce --quick``: errors equal to 1e-11 m, 2.4x fewer evaluations).
     max_step : float, optional
         Largest solver step [s]; default the sampling interval.
 
@@ -306,7 +309,7 @@ class PrescribedODE:
 
 
 def solve_prescribed(ode: PrescribedODE, u: np.ndarray, z0: np.ndarray, v0: np.ndarray,
-                     dt: float, *, progress: bool = False, t: np.ndarray, method: str = "DOP853",
+                     dt: float, *, progress: bool = False, t: np.ndarray, method: str = "RK45",
                      rtol: float = 1e-9, atol: float = 1e-12, x0: np.ndarray | None = None
                      ) -> SolverResult:
     """The reconstruction ODE by :func:`scipy.integrate.solve_ivp` (the solver contract).
