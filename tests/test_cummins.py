@@ -328,3 +328,26 @@ def test_cli_force_file_is_read_by_column_name(co, tmp_path):
     csv.write_text("time,eta,moment\n0,1,2\n2,1,2\n")
     assert main(["simulate", "--coeffs", str(coeffs), "--external-force", str(csv),
                  "--duration", "2", "--out", str(out), "--quiet"]) == 2
+
+
+def test_radiation_model_is_fitted_once_per_coefficient_content(co, monkeypatch):
+    """Repeated simulations of one body reuse the kernel's state-space fit (same history);
+    coefficients with another B(ω) are fitted anew and give another memory force."""
+    import hybridwsi.cummins.system as system
+
+    calls = []
+    fit = system.fit_radiation_ss
+    monkeypatch.setattr(system, "fit_radiation_ss", lambda *a, **k: calls.append(1) or fit(*a, **k))
+    monkeypatch.setattr(system, "_SS_CACHE", type(system._SS_CACHE)())
+    kw = dict(duration=4.0, dt=0.005, z0=0.03)
+    first = cummins.simulate(co, **kw)
+    n_first = len(calls)
+    again = cummins.simulate(co.copy(deep=True), **kw)
+    assert n_first >= 1 and len(calls) == n_first
+    np.testing.assert_array_equal(first.z.values, again.z.values)
+    stiffer = co.assign(radiation_damping=2.0 * co["radiation_damping"])
+    other = cummins.simulate(stiffer, **kw)
+    assert len(calls) > n_first
+    # twice the damping: twice the memory force at the first steps (same motion there)
+    f0, f1 = first.F_rad_mem.values[1:20, 0], other.F_rad_mem.values[1:20, 0]
+    np.testing.assert_allclose(f1, 2.0 * f0, rtol=0.05)
