@@ -295,20 +295,47 @@ def _zero_network(measured):
     return net
 
 
-def test_torch_hybrid_with_zero_network_is_the_cummins_model(setup, measured):
-    """The differentiable rollout of the multi-step training, with a network that adds no
-    force, is cummins.simulate(nonlinear_hydrostatics=True), also with a partial first step."""
+@pytest.mark.parametrize("compiled", [False, True])
+def test_torch_hybrid_with_zero_network_is_the_cummins_model(setup, measured, compiled):
+    """The differentiable rollout of the multi-step training (torch step by step, or the
+    compiled loops), with a network that adds no force, is
+    cummins.simulate(nonlinear_hydrostatics=True), also with a partial first step."""
+    if compiled and not ms._decay_kernel.HAVE_NUMBA:
+        pytest.skip("the compiled rollout needs Numba")
     net = _zero_network(measured)
     h0 = np.array([setup.drop_heights[d] for d in kh.DROPS])
     ref = {d: cummins.simulate(setup.coeffs, mass=setup.mass, duration=1.2, dt=setup.dt,
                                z0=setup.drop_heights[d], nonlinear_hydrostatics=True,
                                body=setup.body) for d in kh.DROPS}
     for first in (0.0, 0.0073):
-        z = ms.torch_decays(net, setup, h0, 0.02, 50, first).detach().numpy()
+        z = ms.torch_decays(net, setup, h0, 0.02, 50, first, compiled=compiled).detach().numpy()
         t = np.r_[0.0, first + 0.02 * np.arange(51)] if first else 0.02 * np.arange(51)
         for k, d in enumerate(kh.DROPS):
             zr = np.interp(t, ref[d]["time"].values, ref[d]["z"].values[:, 0])
             assert np.max(np.abs(z[k] - zr)) < 2e-4 * h0[k]
+
+
+@pytest.mark.skipif(not ms._decay_kernel.HAVE_NUMBA, reason="the compiled rollout needs Numba")
+@pytest.mark.parametrize("hidden", [(16, 16), (5,)])
+def test_compiled_rollout_and_its_adjoint_are_torch_autograd(measured, setup, hidden):
+    """The compiled rollout (forward loops and RK4's discrete adjoint by hand) gives the torch
+    rollout's heave and torch autograd's gradient of a loss in every weight, to rounding,
+    with a partial first step, for two depths."""
+    import torch
+
+    net = kh.fit_network([measured["01D"]], max_epochs=2, hidden=hidden)
+    h0 = np.array([0.03, 0.15])
+    g = torch.as_tensor(np.random.default_rng(3).normal(size=(2, 62)))
+    params = list(net.model_.parameters())
+    runs = {}
+    for compiled in (False, True):
+        z = ms.torch_decays(net, setup, h0, 0.02, 60, 0.0061, compiled=compiled)
+        runs[compiled] = (z.detach().numpy(), torch.autograd.grad((z * g).sum(), params))
+    (z_t, g_t), (z_c, g_c) = runs[False], runs[True]
+    np.testing.assert_allclose(z_c, z_t, rtol=0, atol=1e-13 * np.abs(z_t).max())
+    for a, b in zip(g_t, g_c):
+        np.testing.assert_allclose(b.numpy(), a.numpy(), rtol=0, atol=1e-11 * a.abs().max().item())
+        assert a.abs().max() > 0
 
 
 def test_heave_loss_places_the_lead_shifted_data_on_the_steps(setup, measured):
