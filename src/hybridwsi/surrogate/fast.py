@@ -31,6 +31,7 @@ import numpy as np
 
 from hybridwsi._numba import HAVE_NUMBA, numba
 from hybridwsi.errors import SolverError
+from hybridwsi.surrogate._decay_kernel import flat_layers
 from hybridwsi.forces._compiled import CompiledForce, available, force_rows, packed, quiet, \
     sum_forces
 
@@ -55,19 +56,14 @@ class FoldedLayers:
 
 
 def folded_layers(net: Any) -> FoldedLayers:
-    """The fitted ``ForceNetwork`` with its normalisation folded into the end layers."""
+    """The fitted ``ForceNetwork`` with its normalisation folded into the end layers
+    (:meth:`~hybridwsi.surrogate.network.ForceNetwork.physical_layers`, as arrays)."""
     import torch
 
-    lin = [mod for mod in net.model_ if isinstance(mod, torch.nn.Linear)]
-    ws = [mod.weight.detach().cpu().numpy().astype(float).copy() for mod in lin]
-    bs = [mod.bias.detach().cpu().numpy().astype(float).copy() for mod in lin]
-    # the scaler tensors ForceNetwork.forward uses
-    xm, xs, ym, ys = (t.detach().cpu().numpy().astype(float) for t in (net._xm, net._xs,
-                                                                        net._ym, net._ys))
-    bs[0] = bs[0] - ws[0] @ (xm / xs)
-    ws[0] = ws[0] / xs
-    ws[-1] = ws[-1] * ys[:, None]
-    bs[-1] = bs[-1] * ys + ym
+    with torch.no_grad():
+        pairs = net.physical_layers()
+    ws = [w.detach().cpu().numpy().astype(float) for w, _ in pairs]
+    bs = [b.detach().cpu().numpy().astype(float).copy() for _, b in pairs]
     return FoldedLayers(tuple(np.ascontiguousarray(w.T) for w in ws), tuple(bs), net.activation)
 
 
@@ -191,9 +187,11 @@ def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, bu
         known = packed(prob.forces) if prob.forces else None
         if nc >= BATCH_MIN:  # cases inner: the batch axis last, contiguous
             last = lambda arr: as_c(np.moveaxis(np.asarray(arr, dtype=float), 0, -1))  # noqa
-            wts = tuple(np.ascontiguousarray(w.T) for w in layers.weights)  # (n_out, n_in)
-            bs = tuple(as_c(b) for b in layers.biases)
-            out = _kernel_batch(*physics, known, wts, bs, kind, last(z0), last(v0), last(a0),
+            # flat layers (n_out, n_in) row-major: one compiled kernel for every depth
+            w_flat, b_flat, sizes = flat_layers(list(zip((w.T for w in layers.weights),
+                                                         layers.biases)))
+            out = _kernel_batch(*physics, known, w_flat, b_flat, sizes, kind, last(z0), last(v0),
+                                last(a0),
                                 last(x0), last(buf0[:, ::-1, :]), as_c(pre), as_c(eta), times,
                                 *tail)
         else:  # ring buffer: row `head` is lag 0, row (head - l) % span is lag l
@@ -550,18 +548,20 @@ def _gather_b(ring, head, new_row, use_new, window, stride, feat):
 
 
 @_inline
-def _forward_b(feat, wts, bs, kind):
+def _forward_b(feat, w_flat, b_flat, sizes, kind):
     """All cases through the network: per layer one matrix product ``W (n_out, n_in) @ h
     (n_in, nc)`` (BLAS, ~2x the loops' speed at 32 cases), then bias and activation in one
-    contiguous pass; returns the output (n_out, nc)."""
+    contiguous pass; returns the output (n_out, nc). The layers are flat
+    (:func:`~hybridwsi.surrogate._decay_kernel.flat_layers`)."""
     h = feat
-    n_layer = len(wts)
+    n_layer = sizes.shape[0] - 1
+    ow, ob = 0, 0
     for k in range(n_layer):
-        g = np.dot(wts[k], h)
-        b = bs[k]
-        n_out, nc = g.shape
+        n_in, n_out = sizes[k], sizes[k + 1]
+        g = np.dot(w_flat[ow:ow + n_out * n_in].reshape((n_out, n_in)), h)
+        nc = g.shape[1]
         for j in range(n_out):
-            bj = b[j]
+            bj = b_flat[ob + j]
             if k == n_layer - 1:
                 for c in range(nc):
                     g[j, c] += bj
@@ -580,6 +580,8 @@ def _forward_b(feat, wts, bs, kind):
                 for c in range(nc):
                     x = g[j, c] + bj
                     g[j, c] = 0.5 * x * (1.0 + math.erf(x / math.sqrt(2.0)))
+        ow += n_in * n_out
+        ob += n_out
         h = g
     return h
 
@@ -685,8 +687,8 @@ def _row_b(z, v, a, eta, k, chan_pos, eta_pos, row):
 
 @_jit
 def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c_out,
-                  chan_pos, eta_pos, window, stride, corrections, comps, wts, bs, kind,
-                  z0, v0, a0, x0, ring, pre, eta, t, k0, lead, n_steps, ref_amp, blowup):
+                  chan_pos, eta_pos, window, stride, corrections, comps, w_flat, b_flat, sizes,
+                  kind, z0, v0, a0, x0, ring, pre, eta, t, k0, lead, n_steps, ref_amp, blowup):
     """:func:`_kernel` with the cases inner in the state: ``z0`` (nd, nc), ``x0`` (ns, nc),
     ``ring`` (span, nch, nc); ``pre``, ``eta`` and the outputs as :func:`_kernel`'s, (nc,
     n_time, n) (a step reads/writes one element per case: a few cache lines, reused by the
@@ -717,11 +719,13 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
             # state at t[k1] - dt; p > 0: again on the predicted end-of-step state at t[k1]
             if p == 0:
                 _gather_b(ring, head, row, False, window, stride, feat)
-                _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, v, x, quad, c_out, f)
+                fnet = _forward_b(feat, w_flat, b_flat, sizes, kind)
+                _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f)
             else:
                 _row_b(z1, v1, a1, eta, k1 + lead, chan_pos, eta_pos, row)
                 _gather_b(ring, head, row, True, window, stride, feat)
-                _explicit_force_b(_forward_b(feat, wts, bs, kind), pre, k1, v1, x1, quad, c_out, f)
+                fnet = _forward_b(feat, w_flat, b_flat, sizes, kind)
+                _explicit_force_b(fnet, pre, k1, v1, x1, quad, c_out, f)
             if comps is not None:  # None: pruned at compile time (see run_explicit)
                 _known_b(comps, t[k1] - coef[0] if p == 0 else t[k1], z if p == 0 else z1,
                          v if p == 0 else v1, f, scratch, fail)
