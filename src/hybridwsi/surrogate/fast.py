@@ -717,15 +717,11 @@ def _kernel_batch(scheme, lhs_inv, damping, stiffness, coef, quad, p_ss, q_ss, c
         for p in range(1 + corrections):
             # p = 0: network on the start-of-step window, known explicit forces on the start
             # state at t[k1] - dt; p > 0: again on the predicted end-of-step state at t[k1]
-            if p == 0:
-                _gather_b(ring, head, row, False, window, stride, feat)
-                fnet = _forward_b(feat, w_flat, b_flat, sizes, kind)
-                _explicit_force_b(fnet, pre, k1, v, x, quad, c_out, f)
-            else:
+            if p > 0:
                 _row_b(z1, v1, a1, eta, k1 + lead, chan_pos, eta_pos, row)
-                _gather_b(ring, head, row, True, window, stride, feat)
-                fnet = _forward_b(feat, w_flat, b_flat, sizes, kind)
-                _explicit_force_b(fnet, pre, k1, v1, x1, quad, c_out, f)
+            _gather_b(ring, head, row, p > 0, window, stride, feat)
+            _explicit_force_b(_forward_b(feat, w_flat, b_flat, sizes, kind), pre, k1,
+                              v if p == 0 else v1, x if p == 0 else x1, quad, c_out, f)
             if comps is not None:  # None: pruned at compile time (see run_explicit)
                 _known_b(comps, t[k1] - coef[0] if p == 0 else t[k1], z if p == 0 else z1,
                          v if p == 0 else v1, f, scratch, fail)
