@@ -330,24 +330,37 @@ def test_cli_force_file_is_read_by_column_name(co, tmp_path):
                  "--duration", "2", "--out", str(out), "--quiet"]) == 2
 
 
-def test_radiation_model_is_fitted_once_per_coefficient_content(co, monkeypatch):
-    """Repeated simulations of one body reuse the kernel's state-space fit (same history);
-    coefficients with another B(ω) are fitted anew and give another memory force."""
+def test_radiation_model_is_fitted_once_per_coefficient_content(co, monkeypatch, tmp_path):
+    """Repeated simulations of one body reuse the kernel's state-space fit (same history),
+    from memory and, in a new process (memory emptied), from the disk cache; coefficients with
+    another B(ω) are fitted anew and give another memory force; a corrupt disk entry is fitted
+    again."""
     import hybridwsi.cummins.system as system
+    from hybridwsi.hydro import ss_cache
 
     calls = []
     fit = system.fit_radiation_ss
     monkeypatch.setattr(system, "fit_radiation_ss", lambda *a, **k: calls.append(1) or fit(*a, **k))
-    monkeypatch.setattr(system, "_SS_CACHE", type(system._SS_CACHE)())
+    monkeypatch.setattr(ss_cache, "_memory", type(ss_cache._memory)())
+    monkeypatch.setenv("HYBRIDWSI_CACHE", str(tmp_path))
     kw = dict(duration=4.0, dt=0.005, z0=0.03)
     first = cummins.simulate(co, **kw)
     n_first = len(calls)
     again = cummins.simulate(co.copy(deep=True), **kw)
     assert n_first >= 1 and len(calls) == n_first
     np.testing.assert_array_equal(first.z.values, again.z.values)
+    ss_cache._memory.clear()  # as a new process: the disk entry
+    (entry,) = (tmp_path / "radiation_ss").glob("*.npz")
+    from_disk = cummins.simulate(co, **kw)
+    assert len(calls) == n_first
+    np.testing.assert_array_equal(first.z.values, from_disk.z.values)
+    ss_cache._memory.clear()
+    entry.write_bytes(entry.read_bytes()[:100])  # truncated
+    cummins.simulate(co, **kw)
+    assert len(calls) == 2 * n_first
     stiffer = co.assign(radiation_damping=2.0 * co["radiation_damping"])
     other = cummins.simulate(stiffer, **kw)
-    assert len(calls) > n_first
+    assert len(calls) > 2 * n_first
     # twice the damping: twice the memory force at the first steps (same motion there)
     f0, f1 = first.F_rad_mem.values[1:20, 0], other.F_rad_mem.values[1:20, 0]
     np.testing.assert_allclose(f1, 2.0 * f0, rtol=0.05)

@@ -82,6 +82,7 @@ from hybridwsi.hydro import bem
 from hybridwsi.hydro import coefficients as cf
 from hybridwsi.hydro.formats import read_coefficients
 from hybridwsi.hydro.irf import radiation_irf
+from hybridwsi.hydro.ss_cache import cached_radiation_ss
 from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 from hybridwsi.hydro.strip import case_elements, with_slender_members
 from hybridwsi.importers import read_elevation
@@ -255,11 +256,13 @@ def radiation_ss(coeffs: xr.Dataset, dofs: Sequence[str], mass: Any, dt: float,
     does not capture (the OC4 semi: docs/OC4_SEMI.md)."""
     if fit:
         kw = {k: fit[k] for k in ("t_max", "dt") if k in fit}
-        kernel = radiation_irf(coeffs, **kw).sel(radiating_dof=list(dofs),
-                                                 influenced_dof=list(dofs))
         opts = {k: fit[k] for k in ("tol", "max_order", "balance", "low_frequency")
                 if k in fit}
-        return fit_radiation_ss(kernel, coeffs=coeffs, **opts)
+        dofs = list(dofs)
+        return cached_radiation_ss(  # fitted once per content (the OC4 semi's takes 3 s)
+            coeffs, ("case", dofs, sorted(kw.items()), sorted(opts.items())),
+            lambda: fit_radiation_ss(radiation_irf(coeffs, **kw).sel(
+                radiating_dof=dofs, influenced_dof=dofs), coeffs=coeffs, **opts))
     tol = inspect.signature(cummins.simulate).parameters["ss_tol"].default
     return cummins.build_system(coeffs, dofs=dofs, mass=mass, radiation="statespace", dt=dt,
                                 ss_tol=tol).ss

@@ -24,6 +24,13 @@ from hybridwsi.errors import InputError
 NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
 
 
+def cache_dir(kind: str) -> Path:
+    """The cache folder of ``kind`` ("bem", "moordyn", "radiation_ss"):
+    ``$HYBRIDWSI_CACHE/<kind>`` if that variable is set, else ``~/.cache/hybridwsi/<kind>``."""
+    root = os.environ.get("HYBRIDWSI_CACHE")
+    return (Path(root).expanduser() if root else Path.home() / ".cache" / "hybridwsi") / kind
+
+
 def _atomic_target(path: str | os.PathLike) -> tuple[Path, str]:
     """The file to replace and a temporary file beside it. A symbolic link is written
     through: its target is replaced (in the target's folder), the link stays a link."""

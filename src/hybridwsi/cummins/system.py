@@ -9,10 +9,6 @@ the direct convolution).
 
 from __future__ import annotations
 
-import copy
-import hashlib
-import warnings
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -24,15 +20,11 @@ from hybridwsi.errors import InputError
 from hybridwsi.forces import as_matrix
 from hybridwsi.hydro import coefficients
 from hybridwsi.hydro.irf import radiation_irf
+from hybridwsi.hydro.ss_cache import cached_radiation_ss
 from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 
 RADIATION = ("statespace", "convolution", "none")
 
-#: fitted radiation models of the last few (coefficients, DOFs, options): a study simulates
-#: one body many times (a decay per DOF, an RAO per frequency), and the kernel and its fit
-#: cost 0.3-0.7 s each time. Keyed by the coefficients' content; with their warnings.
-_SS_CACHE: OrderedDict[str, tuple[RadiationSS, list[warnings.WarningMessage]]] = OrderedDict()
-_SS_CACHE_SIZE = 8
 
 
 @dataclass
@@ -164,32 +156,13 @@ def _kernel(coeffs: xr.Dataset, dofs: list[str], irf: xr.DataArray | None,
 
 def _fitted_radiation_ss(coeffs: xr.Dataset, dofs: list[str], t_max: float | None,
                          order: int | None, tol: float, dt: float) -> RadiationSS:
-    """:func:`_fit_for_step` of the coefficients' own kernel, computed once per content.
-
-    A repeated call returns a copy of the cached model and repeats the fit's warnings (so
-    that a caller sees the same as on the first call).
-    """
-    key = hashlib.sha256(repr((dofs, t_max, order, tol, dt)).encode())
-    for name in sorted(coeffs.variables):
-        v = coeffs.variables[name]
-        key.update(repr((name, v.dims, v.dtype.str, v.shape)).encode())
-        key.update(np.ascontiguousarray(v.values).tobytes() if v.dtype != object
-                   else repr(v.values.tolist()).encode())
-    digest = key.hexdigest()
-    hit = _SS_CACHE.get(digest)
-    if hit is None:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            ss = _fit_for_step(_kernel(coeffs, dofs, None, t_max, dt=None), order, tol,
-                               coeffs, dt)
-        hit = _SS_CACHE[digest] = (ss, caught)
-        while len(_SS_CACHE) > _SS_CACHE_SIZE:
-            _SS_CACHE.popitem(last=False)  # the least recently used
-    else:
-        _SS_CACHE.move_to_end(digest)
-    for w in hit[1]:
-        warnings.warn(w.message, w.category, stacklevel=4)
-    return copy.deepcopy(hit[0])
+    """:func:`_fit_for_step` of the coefficients' own kernel, fitted once per content
+    (:func:`hybridwsi.hydro.ss_cache.cached_radiation_ss`: a copy, the fit's warnings
+    repeated)."""
+    return cached_radiation_ss(
+        coeffs, ("cummins", dofs, t_max, order, tol, dt),
+        lambda: _fit_for_step(_kernel(coeffs, dofs, None, t_max, dt=None), order, tol, coeffs,
+                              dt))
 
 
 def _kernel_on_grid(k: xr.DataArray, dt: float) -> np.ndarray:

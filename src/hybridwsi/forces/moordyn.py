@@ -52,7 +52,7 @@ import xarray as xr
 from hybridwsi._meta import package_version
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError, SolverError
-from hybridwsi.files import write_json
+from hybridwsi.files import cache_dir, write_json
 from hybridwsi.forces.base import KnownComponent, kinematic
 from hybridwsi.forces.mooring import rotation_matrix
 
@@ -399,8 +399,7 @@ SHIPPED_STATICS = "moordyn_statics.json"
 
 def statics_cache_dir() -> Path:
     """``$HYBRIDWSI_CACHE/moordyn`` if that variable is set, else ``~/.cache/hybridwsi/moordyn``."""
-    root = os.environ.get("HYBRIDWSI_CACHE")
-    return (Path(root).expanduser() if root else Path.home() / ".cache" / "hybridwsi") / "moordyn"
+    return cache_dir("moordyn")
 
 
 def statics_key(text: str, what: str, step: float) -> str:

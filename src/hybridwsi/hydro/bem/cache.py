@@ -3,7 +3,6 @@ cache folder, and the resumable store of solved frequencies (read, merged, what 
 
 from __future__ import annotations
 
-import os
 import warnings
 from pathlib import Path
 
@@ -11,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from hybridwsi.errors import InputError
-from hybridwsi.files import read_netcdf
+from hybridwsi.files import cache_dir, read_netcdf
 
 #: shipped result of ``compute(**paper_configuration())`` (see data/README.md)
 PAPER_COEFFS = Path(__file__).resolve().parents[2] / "data" / "bem_paper_sphere.nc"
@@ -48,8 +47,7 @@ def shipped(input_hash: str) -> xr.Dataset | None:
 
 def default_cache_dir() -> Path:
     """``$HYBRIDWSI_CACHE/bem`` if that variable is set, else ``~/.cache/hybridwsi/bem``."""
-    root = os.environ.get("HYBRIDWSI_CACHE")
-    return Path(root).expanduser() / "bem" if root else Path.home() / ".cache" / "hybridwsi" / "bem"
+    return cache_dir("bem")
 
 
 def read_cache(path: Path) -> xr.Dataset | None:
