@@ -35,10 +35,11 @@ SHARED_RUN_MODULES = ("tests/test_reproduce.py", "tests/test_fowt.py",
 
 #: units of work started first under xdist, largest first (so that the last units to finish
 #: are small ones): the largest CPU times of the suite (--durations)
-HEAVY_FIRST = (REPRODUCE_GROUP, "tests/test_corpus.py", "tests/test_sph_static.py",
-               "tests/test_sph_tank.py", "tests/test_sweep.py", "tests/test_sph_waves.py",
-               "tests/test_surrogate_rollout.py", "tests/test_sph_packing.py",
-               "tests/test_sweep_case.py", "tests/test_sph_3d.py")
+HEAVY_FIRST = (REPRODUCE_GROUP, "tests/test_corpus.py", "tests/test_tutorial.py",
+               "tests/test_sph_tank.py", "tests/test_surrogate_fast.py",
+               "tests/test_sph_waves.py", "tests/test_sph_static.py", "tests/test_bem.py",
+               "tests/test_sweep.py", "tests/test_surrogate_rollout.py",
+               "tests/test_sweep_case.py", "tests/test_sph_3d.py", "tests/test_sph_packing.py")
 
 
 def work_unit(nodeid: str) -> str:

@@ -200,3 +200,32 @@ def test_table_round_trip_without_moorpy(table, tmp_path):
     q = np.array([[10.0, -5.0, 1.0, 0.02, 0.05, -0.1], [-30.0, 15.0, -5.0, -0.08, -0.12, 0.1]])
     np.testing.assert_array_equal(again.force6(q), table.force6(q))
     assert again.dataset.attrs["input_hash"] == table.dataset.attrs["input_hash"]
+
+
+def test_case_table_is_kept_on_disk_and_a_corrupt_entry_rebuilt(case, monkeypatch, tmp_path):
+    """MooringForce.from_case tabulates once per content: a second build reads the cached
+    table (no MoorPy system made) and gives the same forces; a truncated entry is tabulated
+    again; another line length is another entry."""
+    import hybridwsi.forces.mooring as mooring
+
+    monkeypatch.setenv("HYBRIDWSI_CACHE", str(tmp_path))
+    built = []
+    real = mooring.MooringSystem.__init__
+    monkeypatch.setattr(mooring.MooringSystem, "__init__",
+                        lambda self, lines: built.append(1) or real(self, lines))
+    small = {**case, "mooring": {**case["mooring"], "table": {"Surge": 2.0, "Heave": 1.0,
+                                                               "Pitch": 0.02, "spacing": 2.0}}}
+    first = MooringForce.from_case(small)
+    (entry,) = (tmp_path / "mooring").glob("*.nc")
+    again = MooringForce.from_case(small)
+    assert built == [1]
+    q = np.array([[1.0, 0.5, 0.01]])
+    np.testing.assert_array_equal(again.table.force6(again._full(q)),
+                                  first.table.force6(first._full(q)))
+    entry.write_bytes(entry.read_bytes()[:200])
+    MooringForce.from_case(small)
+    assert built == [1, 1]
+    longer = {**small, "mooring": {**small["mooring"],
+                                   "unstretched_length": small["mooring"]["unstretched_length"] + 1}}
+    MooringForce.from_case(longer)
+    assert built == [1, 1, 1] and len(list((tmp_path / "mooring").glob("*.nc"))) == 2

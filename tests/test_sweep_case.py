@@ -101,6 +101,7 @@ def test_case_sweep_resumed_equals_uninterrupted(tmp_path, config, monkeypatch):
     # the interrupted run: two seas finished (in this process), the manifest still "running",
     # a half-written part and a half-built store left behind, as a kill leaves them
     tabulated = []
+    monkeypatch.setenv("HYBRIDWSI_CACHE", str(tmp_path / "cache"))  # no table kept before
     original = MooringSystem.tabulate
     monkeypatch.setattr(MooringSystem, "tabulate",
                         lambda self, *a, **k: tabulated.append(1) or original(self, *a, **k))

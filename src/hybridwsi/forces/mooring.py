@@ -57,6 +57,7 @@ from scipy.interpolate import RectBivariateSpline
 
 from hybridwsi.dofs import RIGID_DOFS, check_dofs, index
 from hybridwsi.errors import InputError, SolverError
+from hybridwsi.files import cache_dir, read_netcdf, to_netcdf
 from hybridwsi.forces.base import KnownComponent, kinematic
 
 #: default tabulation box, half-widths per DOF [m, m, m, rad, rad, rad] (docs/OC3_HYWIND.md:
@@ -443,6 +444,25 @@ def table_hash(lines: MooringLines, ranges: Mapping[str, float], spacing: float)
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
 
 
+def cached_table(lines: MooringLines, ranges: Mapping[str, float] | None,
+                 spacing: float = DEFAULT_SPACING) -> MooringTable:
+    """:meth:`MooringSystem.tabulate`, kept in ``$HYBRIDWSI_CACHE/mooring/<table_hash>.nc``
+    (every command of a case tabulated its mooring again, ~1.3 s of MoorPy); an unreadable
+    entry is tabulated again and replaced, an unwritable folder only costs the tabulation."""
+    path = cache_dir("mooring") / f"{table_hash(lines, ranges, spacing)}.nc"
+    if path.is_file():
+        try:
+            return MooringTable.from_dataset(read_netcdf(path))
+        except InputError:
+            pass
+    table = MooringSystem(lines).tabulate(ranges, spacing)
+    try:
+        to_netcdf(table.dataset, path)
+    except OSError:
+        pass
+    return table
+
+
 def box_ranges(ranges: Mapping[str, float] | None) -> dict[str, float]:
     """Half-widths of the displacement box for all 6 DOFs (missing DOFs: the default)."""
     out = dict(DEFAULT_RANGES)
@@ -795,7 +815,7 @@ class MooringForce(_QuasiStatic):
         """
         box = dict(case.get("mooring", {}).get("table", {}))
         spacing = box.pop("spacing", DEFAULT_SPACING)
-        table = MooringSystem.from_case(case).tabulate(box, spacing)
+        table = cached_table(MooringLines.from_case(case), box, spacing)
         return cls(table, dofs if dofs is not None else case.get("default_dofs", RIGID_DOFS))
 
     def _full(self, z: np.ndarray) -> np.ndarray:
