@@ -210,3 +210,11 @@ def test_member_kinematics_of_a_spread_sea_are_the_sum_of_its_components():
     h = 1e-4
     fd = (kin.velocity_acceleration(t + h)[0] - kin.velocity_acceleration(t - h)[0]) / (2 * h)
     assert np.allclose(acc, fd, rtol=0, atol=1e-6 * np.abs(acc).max())
+    # the kept last two times: asked again (after a third time pushed the first out), each
+    # time gives its own values, read-only (a caller cannot change what the next one reads)
+    for when in (t + h, t, t - h, t, t + h):
+        again = kin.velocity_acceleration(when)
+        fresh = waves.AiryPoints(sea, pts, depth=200.0).velocity_acceleration(when)
+        for a, b in zip(again, fresh):
+            np.testing.assert_array_equal(a, b)
+            assert not a.flags.writeable

@@ -708,18 +708,32 @@ class AiryPoints:
             self.vertical * e_phase])
 
     def velocity_acceleration(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Velocity [m/s] and acceleration [m/s²] at one time ``t`` [s], each (n, 3).
+        """Velocity [m/s] and acceleration [m/s²] at one time ``t`` [s], each (n, 3), read-only.
 
         u_x + i(·) = Σ_j C_ij e^{iω_j t}: velocity Re (horizontal), −Im (vertical); the
         acceleration is the same sum with ω_j e^{iω_j t}: −Im (horizontal), −Re (vertical).
+        The last two times are kept: an RK4 step asks twice at its midpoint, and its end is
+        the next step's start (5 calls a step become 2).
         """
+        t = float(t)
+        memo = self.__dict__.setdefault("_memo", {})
+        if t not in memo:
+            if len(memo) >= 2:
+                del memo[next(iter(memo))]  # the oldest
+            memo[t] = self._evaluate(t)
+        return memo[t]
+
+    def _evaluate(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         phasor = np.exp(1j * self.omega * float(t))
         both = self._amplitudes @ np.stack([phasor, self.omega * phasor], axis=1)  # (3n, 2)
         n = self.phase.shape[0]
         f = float(ramp_factor(np.array([float(t)]), self.ramp)[0]) if self.ramp else 1.0
         vel = np.concatenate([both[:2 * n, 0].real, -both[2 * n:, 0].imag]) * f
         acc = np.concatenate([-both[:2 * n, 1].imag, -both[2 * n:, 1].real]) * f
-        return vel.reshape(3, n).T, acc.reshape(3, n).T
+        out = vel.reshape(3, n).T, acc.reshape(3, n).T
+        for a in out:
+            a.flags.writeable = False  # shared by the calls at the same time
+        return out
 
 
 def particle_velocity(wave: Wave, t: float | np.ndarray, x: float, z: Any, *, y: float = 0.0,
