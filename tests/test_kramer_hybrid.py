@@ -338,6 +338,28 @@ def test_compiled_rollout_and_its_adjoint_are_torch_autograd(measured, setup, hi
         assert a.abs().max() > 0
 
 
+def test_a_network_with_its_own_forward_rolls_out_as_its_layers_do(measured, setup):
+    """A (z, ż) network known only by its ``forward`` (scripts/kramer_ensemble.py wraps one
+    that appends |ż|ż) rolls out through ``forward``: as the ForceNetwork it wraps, with and
+    without gradient."""
+    net = kh.fit_network([measured["01D"]], max_epochs=2)
+
+    class Wrapped:
+        inputs, window = ("z", "zdot"), 1
+
+        def __init__(self, inner):
+            self.inner, self.model_ = inner, inner.model_
+
+        def forward(self, x):
+            return self.inner.forward(x)
+
+    h0 = np.array([0.03, 0.09])
+    a = ms.torch_decays(net, setup, h0, 0.02, 40, 0.004).detach().numpy()
+    b = ms.torch_decays(Wrapped(net), setup, h0, 0.02, 40, 0.004)
+    np.testing.assert_allclose(b.detach().numpy(), a, rtol=0, atol=1e-12 * np.abs(a).max())
+    assert b.requires_grad
+
+
 def test_heave_loss_places_the_lead_shifted_data_on_the_steps(setup, measured):
     """Synthetic 'measurements' made by releasing the physics model δ = 4.3 ms before the
     data clock's zero, sampled on the data's grid: the loss of the zero network is ~0 with the

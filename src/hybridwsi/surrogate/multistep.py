@@ -86,37 +86,34 @@ def torch_decays(net: Any, setup: KramerSetup, h0: np.ndarray, dt: float, n_step
     """
     import torch
 
-    from hybridwsi.surrogate.network import activation_function
-
     lin, bias, poly = _linear_part(setup)
     m0 = setup.mass + setup.added_mass_inf
     steps = np.array(([first] if first > 1e-12 else []) + [dt] * n_steps, dtype=float)
+    # a ForceNetwork's layers in physical units; another (z, ż) network (a script's wrapper
+    # with its own forward, scripts/kramer_ensemble.py) is called as it is
+    layers = (net.physical_layers(out_scale=1.0 / m0) if hasattr(net, "physical_layers")
+              else None)
+    plain = layers is not None and layers[0][0].shape[1] == 2
     if compiled is None:
-        compiled = _decay_kernel.HAVE_NUMBA and net.activation == "tanh"
+        compiled = _decay_kernel.HAVE_NUMBA and plain and net.activation == "tanh"
+    elif compiled and not (_decay_kernel.HAVE_NUMBA and plain and net.activation == "tanh"):
+        raise InputError("the compiled rollout needs Numba and a tanh ForceNetwork of (z, ż)")
     if compiled:
-        layers = [t for pair in net.physical_layers(out_scale=1.0 / m0) for t in pair]
         y0 = np.zeros((len(h0), lin.shape[0]))
         y0[:, 0] = np.asarray(h0, dtype=float)
         consts = (lin, bias, float(poly[0]) / m0, float(poly[1]) / m0, y0, steps)
-        return _compiled_decays_function().apply(consts, *layers)
+        return _compiled_decays_function().apply(consts, *[t for pair in layers for t in pair])
     n = lin.shape[0]
     lin_t, bias_t = torch.as_tensor(lin.T.copy()), torch.as_tensor(bias)
     e_v = torch.zeros(1, n, dtype=torch.float64)
     e_v[0, 1] = 1.0
     p3, p2 = float(poly[0]) / m0, float(poly[1]) / m0
-    layers = net.physical_layers(out_scale=1.0 / m0)
-    # the first layer reads (z, ż) from the whole state: zero columns for x, no slicing per step
-    w, b = layers[0]
-    layers[0] = (torch.cat([w, torch.zeros(w.shape[0], n - 2, dtype=w.dtype)], dim=1), b)
-    act = activation_function(net.activation)
+    network = (_layers_force(layers, net.activation, n) if plain
+               else lambda y: net.forward(y[:, :2]) / m0)
 
     def rhs(y: Any) -> Any:
-        h = y
-        for k, (w, b) in enumerate(layers):
-            h = torch.nn.functional.linear(h, w, b)
-            h = act(h) if k < len(layers) - 1 else h
         z = y[:, :1]
-        f = torch.addcmul(h, z * z, z * p3 + p2)  # N/m0 + the cubic's z³ and z² terms / m0
+        f = torch.addcmul(network(y), z * z, z * p3 + p2)  # N/m0 + the cubic's z³, z² / m0
         return torch.addcmul(torch.addmm(bias_t, y, lin_t), f, e_v)
 
     y = torch.zeros(len(h0), n, dtype=torch.float64)
@@ -126,6 +123,28 @@ def torch_decays(net: Any, setup: KramerSetup, h0: np.ndarray, dt: float, n_step
         y = rk4_step(rhs, y, float(h))
         out.append(y)
     return torch.stack(out, dim=1)[:, :, 0]
+
+
+def _layers_force(layers: list[tuple[Any, Any]], activation: str, n: int) -> Callable:
+    """The network force / (m + A∞) on the whole state (B, n) from its physical layers: the
+    first layer gets zero columns for x (no slicing of the state per evaluation)."""
+    import torch
+
+    from hybridwsi.surrogate.network import activation_function
+
+    w, b = layers[0]
+    layers = [(torch.cat([w, torch.zeros(w.shape[0], n - 2, dtype=w.dtype)], dim=1), b),
+              *layers[1:]]
+    act = activation_function(activation)
+
+    def force(y: Any) -> Any:
+        h = y
+        for k, (w, b) in enumerate(layers):
+            h = torch.nn.functional.linear(h, w, b)
+            h = act(h) if k < len(layers) - 1 else h
+        return h
+
+    return force
 
 
 @functools.cache
