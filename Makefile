@@ -27,6 +27,9 @@ run: $(STAMP)
 
 # --dist loadscope: a test module (tests/conftest.py: or the modules of the shared reproduce
 # run) is one unit of work, its fixtures built once; --no-loadscope-reorder: heaviest first
+# bytecode kept: where PYTHONDONTWRITEBYTECODE is set, every worker and subprocess otherwise
+# compiles the package again and pytest rewrites every test module again in each worker
+test: export PYTHONDONTWRITEBYTECODE :=
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n $(TEST_JOBS) --dist loadscope --no-loadscope-reorder \
 	    --durations=15

@@ -338,6 +338,23 @@ def test_compiled_rollout_and_its_adjoint_are_torch_autograd(measured, setup, hi
         assert a.abs().max() > 0
 
 
+@pytest.mark.skipif(not ms._decay_kernel.HAVE_NUMBA, reason="the compiled decays need Numba")
+def test_compiled_structured_decays_are_the_numpy_loop(setup, monkeypatch):
+    """integrate_decay's compiled loop against its NumPy loop, batched: physics, a fitted-size
+    residual, and one that leaves the water (NaN from the same step on), to rounding."""
+    coef = np.array([[0.0] * 6, [0.4, -3.0, 0.6, 2.0, 5.0, 300.0],
+                     [0.0, 0.0, -40.0, 0.0, 0.0, 0.0]])
+    h0 = np.array([0.03, 0.09, 0.15])
+    t_c, z_c = st.integrate_decay(setup, h0, coef, duration=3.0, dt=0.004)
+    monkeypatch.setattr(st._decay_kernel, "HAVE_NUMBA", False)
+    t_n, z_n = st.integrate_decay(setup, h0, coef, duration=3.0, dt=0.004)
+    np.testing.assert_array_equal(t_c, t_n)
+    assert np.isnan(z_n[2]).any() and np.isfinite(z_n[:2]).all()
+    np.testing.assert_array_equal(np.isnan(z_c), np.isnan(z_n))
+    ok = np.isfinite(z_n)
+    np.testing.assert_allclose(z_c[ok], z_n[ok], rtol=0, atol=1e-12 * np.abs(z_n[ok]).max())
+
+
 def test_a_network_with_its_own_forward_rolls_out_as_its_layers_do(measured, setup):
     """A (z, ż) network known only by its ``forward`` (scripts/kramer_ensemble.py wraps one
     that appends |ż|ż) rolls out through ``forward``: as the ForceNetwork it wraps, with and

@@ -174,3 +174,44 @@ def flat_layers(layers: list[tuple[np.ndarray, np.ndarray]]
     w = np.concatenate([np.ascontiguousarray(wk, dtype=float).ravel() for wk, _ in layers])
     b = np.concatenate([np.asarray(bk, dtype=float).ravel() for _, bk in layers])
     return w, b, sizes
+
+
+@_jit
+def structured_decays(z_tab, f_tab, ar, br, cr, m0, coef, h0, dt, n_steps, radius):
+    """Heave (n_run, n_steps + 1) [m] of the structured decays of
+    :func:`hybridwsi.surrogate.structured.integrate_decay` (constant A∞): RK4 in the same
+    arithmetic, one run after the other; NaN from where a run leaves ``|z| <= radius``."""
+    n_run, ns = h0.shape[0], ar.shape[0]
+    nst = 2 + ns
+    zs = np.full((n_run, n_steps + 1), np.nan)
+    y, u = np.empty(nst), np.empty(nst)
+    d = np.empty((4, nst))
+    for c in range(n_run):
+        a1, a2, b1, b2, k1, k3 = coef[c, 0], coef[c, 1], coef[c, 2], coef[c, 3], coef[c, 4], \
+            coef[c, 5]
+        y[:] = 0.0
+        y[0] = h0[c]
+        zs[c, 0] = h0[c]
+        for k in range(n_steps):
+            for s in range(4):
+                for i in range(nst):
+                    u[i] = y[i] + (_C[s] * dt) * d[s - 1, i] if s > 0 else y[i]
+                z, v = u[0], u[1]
+                xc = 0.0
+                for j in range(ns):
+                    xc += u[2 + j] * cr[j]
+                f = np.interp(z, z_tab, f_tab) - xc - b1 * v - b2 * abs(v) * v - k1 * z \
+                    - k3 * z ** 3
+                d[s, 0] = v
+                d[s, 1] = f / (m0 + a1 * z + a2 * z * z)
+                for i in range(ns):
+                    acc = 0.0
+                    for j in range(ns):
+                        acc += u[2 + j] * ar[i, j]
+                    d[s, 2 + i] = acc + v * br[i]
+            for i in range(nst):
+                y[i] = y[i] + (dt / 6.0) * (d[0, i] + 2 * d[1, i] + 2 * d[2, i] + d[3, i])
+            if not (np.isfinite(y[0]) and abs(y[0]) <= radius):
+                break  # left the water / diverged: NaN from here
+            zs[c, k + 1] = y[0]
+    return zs

@@ -23,6 +23,7 @@ import xarray as xr
 
 from hybridwsi.diagnostic.stability import CoupledStep, StabilityReport, assess
 from hybridwsi.hydro import coefficients
+from hybridwsi.surrogate import _decay_kernel
 from hybridwsi.surrogate.multistep import rk4_step
 
 if TYPE_CHECKING:  # the set-up's module imports this one
@@ -180,6 +181,11 @@ def integrate_decay(setup: KramerSetup, h0: float | np.ndarray,
 
     n = int(round(duration / dt))
     t = np.arange(n + 1) * dt
+    if _decay_kernel.HAVE_NUMBA and not lagrangian:  # the same loop compiled (~50x faster)
+        zs = _decay_kernel.structured_decays(
+            *(np.ascontiguousarray(a, dtype=float) for a in (z_tab, f_tab, ar, br, cr)),
+            float(m0), np.ascontiguousarray(c), h0, dt, n, r)
+        return t, (zs[0] if scalar else zs)
     y = np.zeros((n_run, 2 + ar.shape[0]))  # (z, ż, x)
     y[:, 0] = h0
     zs = np.full((n_run, n + 1), np.nan)
