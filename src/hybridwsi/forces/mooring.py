@@ -450,11 +450,11 @@ def cached_table(lines: MooringLines, ranges: Mapping[str, float] | None,
     (every command of a case tabulated its mooring again, ~1.3 s of MoorPy); an unreadable
     entry is tabulated again and replaced, an unwritable folder only costs the tabulation."""
     path = cache_dir("mooring") / f"{table_hash(lines, ranges, spacing)}.nc"
-    if path.is_file():
-        try:
+    try:
+        if path.is_file():
             return MooringTable.from_dataset(read_netcdf(path))
-        except InputError:
-            pass
+    except (OSError, InputError):  # an unreadable folder or entry: tabulated again
+        pass
     table = MooringSystem(lines).tabulate(ranges, spacing)
     try:
         to_netcdf(table.dataset, path)

@@ -89,17 +89,14 @@ def _path(digest: str) -> Path:
 
 def _read(digest: str) -> tuple[RadiationSS, list[tuple[str, str]]] | None:
     """The disk entry, or None when there is none or it cannot be read (it is refitted)."""
-    path = _path(digest)
-    if not path.is_file():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as f:
+    try:  # a missing, unreadable or corrupt entry (or folder) is fitted again
+        with np.load(_path(digest), allow_pickle=False) as f:
             meta = json.loads(str(f["meta"]))
             ss = RadiationSS(*(np.array(f[k]) for k in "ABCD"),
                              **{k: meta[k] for k in _SCALARS})
         return ss, [tuple(w) for w in meta["warnings"]]
     except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile):
-        return None  # corrupt or truncated: fitted again and overwritten
+        return None
 
 
 def _write(digest: str, hit: tuple[RadiationSS, list[tuple[str, str]]]) -> None:
