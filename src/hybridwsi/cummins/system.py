@@ -26,7 +26,6 @@ from hybridwsi.hydro.statespace import RadiationSS, fit_radiation_ss
 RADIATION = ("statespace", "convolution", "none")
 
 
-
 @dataclass
 class CumminsSystem:
     """Matrices of the Cummins equation for ``dofs`` (rows = influenced DOF).

@@ -28,12 +28,11 @@ def _jit(fn):
 
 
 @_jit
-def _mlp(w, b, sizes, x0, x1, act):
+def _mlp(w, b, sizes, x0, x1, act, buf_in, buf_out):
     """The MLP on the input ``(x0, x1)``, its hidden activations written into ``act``
-    (concatenated); returns the scalar output."""
+    (concatenated); returns the scalar output. ``buf_in``, ``buf_out``: scratch of the
+    largest width."""
     n_layer = sizes.shape[0] - 1
-    buf_in = np.empty(sizes.max())
-    buf_out = np.empty(sizes.max())
     buf_in[0], buf_in[1] = x0, x1
     ow, ob, oa = 0, 0, 0
     for k in range(n_layer):
@@ -54,7 +53,7 @@ def _mlp(w, b, sizes, x0, x1, act):
 
 
 @_jit
-def _rhs(lin, bias, p3, p2, w, b, sizes, u, d, act):
+def _rhs(lin, bias, p3, p2, w, b, sizes, u, d, act, scratch):
     """``d = f(u)`` of one case (the state derivative), ``act`` the network's activations."""
     n = u.shape[0]
     for i in range(n):
@@ -63,7 +62,7 @@ def _rhs(lin, bias, p3, p2, w, b, sizes, u, d, act):
             s += lin[i, j] * u[j]
         d[i] = s
     z = u[0]
-    d[1] += _mlp(w, b, sizes, z, u[1], act) + z * z * (z * p3 + p2)
+    d[1] += _mlp(w, b, sizes, z, u[1], act, scratch[0], scratch[1]) + z * z * (z * p3 + p2)
 
 
 @_jit
@@ -81,6 +80,7 @@ def forward(lin, bias, p3, p2, w, b, sizes, y0, steps):
     y = y0.copy()
     u = np.empty(n)
     d = np.empty((4, n))
+    scratch = np.empty((2, sizes.max()))
     for c in range(nc):
         z_out[c, 0] = y[c, 0]
         for k in range(ns):
@@ -89,7 +89,7 @@ def forward(lin, bias, p3, p2, w, b, sizes, y0, steps):
                 for i in range(n):
                     u[i] = y[c, i] + (_C[s] * h * d[s - 1, i] if s > 0 else 0.0)
                     tape_u[k, s, c, i] = u[i]
-                _rhs(lin, bias, p3, p2, w, b, sizes, u, d[s], tape_a[k, s, c])
+                _rhs(lin, bias, p3, p2, w, b, sizes, u, d[s], tape_a[k, s, c], scratch)
             for i in range(n):
                 y[c, i] += h * (_W[0] * d[0, i] + _W[1] * d[1, i] + _W[2] * d[2, i]
                                 + _W[3] * d[3, i])
@@ -98,9 +98,10 @@ def forward(lin, bias, p3, p2, w, b, sizes, y0, steps):
 
 
 @_jit
-def _rhs_vjp(lin, p3, p2, w, b, sizes, u, act, a, out, gw, gb):
+def _rhs_vjp(lin, p3, p2, w, b, sizes, u, act, a, out, gw, gb, delta, prev):
     """``out = J(u)ᵀ a`` of :func:`_rhs`, and the weights' share ``a_ż ∂N/∂θ`` added to
-    ``gw``, ``gb`` (the activations ``act`` of the forward pass at ``u``)."""
+    ``gw``, ``gb`` (the activations ``act`` of the forward pass at ``u``); ``delta``,
+    ``prev``: scratch of the largest width."""
     n = u.shape[0]
     for j in range(n):
         s = 0.0
@@ -111,9 +112,7 @@ def _rhs_vjp(lin, p3, p2, w, b, sizes, u, act, a, out, gw, gb):
     z = u[0]
     out[0] += g * (3.0 * p3 * z * z + 2.0 * p2 * z)
     n_layer = sizes.shape[0] - 1
-    width = sizes.max()
-    delta = np.zeros(width)  # gradient at the current layer's output
-    prev = np.empty(width)
+    delta[:] = 0.0  # gradient at the current layer's output
     delta[0] = g
     ow, ob, oa = w.shape[0], b.shape[0], 0  # offsets, walked back from the ends
     for k in range(1, n_layer):
@@ -148,6 +147,7 @@ def adjoint(lin, p3, p2, w, b, sizes, steps, tape_u, tape_a, grad_z):
     lam = np.empty(n)
     abar = np.empty((4, n))
     ubar = np.empty(n)
+    delta, prev = np.empty(sizes.max()), np.empty(sizes.max())
     for c in range(nc):
         lam[:] = 0.0
         lam[0] = grad_z[c, ns]
@@ -158,7 +158,7 @@ def adjoint(lin, p3, p2, w, b, sizes, steps, tape_u, tape_a, grad_z):
                     abar[s, i] = _W[s] * h * lam[i]
             for s in range(3, -1, -1):
                 _rhs_vjp(lin, p3, p2, w, b, sizes, tape_u[k, s, c], tape_a[k, s, c],
-                         abar[s], ubar, gw, gb)
+                         abar[s], ubar, gw, gb, delta, prev)
                 for i in range(n):
                     lam[i] += ubar[i]
                     if s > 0:

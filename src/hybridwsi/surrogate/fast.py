@@ -191,9 +191,8 @@ def run_explicit(prob: ExplicitProblem, layers: FoldedLayers, z0, v0, a0, x0, bu
             w_flat, b_flat, sizes = flat_layers(list(zip((w.T for w in layers.weights),
                                                          layers.biases)))
             out = _kernel_batch(*physics, known, w_flat, b_flat, sizes, kind, last(z0), last(v0),
-                                last(a0),
-                                last(x0), last(buf0[:, ::-1, :]), as_c(pre), as_c(eta), times,
-                                *tail)
+                                last(a0), last(x0), last(buf0[:, ::-1, :]), as_c(pre),
+                                as_c(eta), times, *tail)
         else:  # ring buffer: row `head` is lag 0, row (head - l) % span is lag l
             ring = np.ascontiguousarray(buf0[:, ::-1, :])
             out = _kernel(*physics, known, *padded_layers(layers), kind, as_c(z0), as_c(v0),

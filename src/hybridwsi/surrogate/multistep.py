@@ -183,8 +183,6 @@ def _compiled_decays_function() -> Any:
     return CompiledDecays
 
 
-
-
 def _linear_part(setup: KramerSetup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hybrid's right-hand side on the state ``y = (z, ż, x)`` without the network and
     the cubic's z³ and z² terms: ``ẏ = L y + c``, and the cubic (highest power first).
